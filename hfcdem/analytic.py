@@ -1,0 +1,235 @@
+"""Closed-form references that hfcdem is verified against.
+
+Conventions: SI units; stresses *compression positive* (rock-mechanics sign), as
+in the references; ``theta`` is measured from the direction of SH.  The plane
+strain modulus is ``E' = E / (1 - nu^2)``.  Sources: design.md "Verification
+references" and the seed papers (Sneddon, Kirsch, Hubbert-Willis, KGD).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+ArrayLike = npt.ArrayLike
+FloatArray = npt.NDArray[np.float64]
+
+
+def plane_strain_modulus(youngs_modulus: float, poisson_ratio: float) -> float:
+    """Return E' = E / (1 - nu^2)."""
+    return youngs_modulus / (1.0 - poisson_ratio**2)
+
+
+# ---------------------------------------------------------------------------
+# Pressurised cracks
+# ---------------------------------------------------------------------------
+
+
+def sneddon_opening(
+    x: ArrayLike, half_length: float, pressure: float, youngs_modulus: float, poisson_ratio: float
+) -> FloatArray:
+    """Return the opening w(x) = (4 p / E') sqrt(a^2 - x^2) of a 2D plane-strain crack.
+
+    With a background stress sigma0 normal to the crack (compression positive) the
+    opening is that of the net pressure ``p - sigma0`` (Griffith, seed 000 eq. 17).
+    """
+    x = np.asarray(x, dtype=float)
+    e_prime = plane_strain_modulus(youngs_modulus, poisson_ratio)
+    return 4.0 * pressure / e_prime * np.sqrt(np.clip(half_length**2 - x**2, 0.0, None))
+
+
+def sneddon_area(
+    half_length: float, pressure: float, youngs_modulus: float, poisson_ratio: float
+) -> float:
+    """Cross-section area of the opened 2D crack: 2 pi p a^2 / E'."""
+    return (
+        2.0
+        * np.pi
+        * pressure
+        * half_length**2
+        / plane_strain_modulus(youngs_modulus, poisson_ratio)
+    )
+
+
+def penny_opening(
+    r: ArrayLike, radius: float, pressure: float, youngs_modulus: float, poisson_ratio: float
+) -> FloatArray:
+    """Return the opening of a penny-shaped crack, 8 (1 - nu^2) p a / (pi E) sqrt(1 - r^2/a^2)."""
+    r = np.asarray(r, dtype=float)
+    w0 = 8.0 * (1.0 - poisson_ratio**2) * pressure * radius / (np.pi * youngs_modulus)
+    return w0 * np.sqrt(np.clip(1.0 - (r / radius) ** 2, 0.0, None))
+
+
+def penny_volume(
+    radius: float, pressure: float, youngs_modulus: float, poisson_ratio: float
+) -> float:
+    """Volume of the opened penny-shaped crack: 16 p a^3 / (3 E')."""
+    return 16.0 * pressure * radius**3 / (3.0 * plane_strain_modulus(youngs_modulus, poisson_ratio))
+
+
+# ---------------------------------------------------------------------------
+# Borehole in an infinite plate (Kirsch) and breakdown criteria
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class KirschStress:
+    """Polar stress components around a borehole, compression positive."""
+
+    rr: FloatArray
+    tt: FloatArray
+    rt: FloatArray
+
+
+def kirsch_stress(
+    r: ArrayLike,
+    theta: ArrayLike,
+    radius: float,
+    sh_max: float,
+    sh_min: float,
+    wellbore_pressure: float,
+) -> KirschStress:
+    """Kirsch field around a pressurised hole of ``radius`` under far-field (SH, Sh).
+
+    ``theta`` is measured from the SH direction, stresses are compression positive.
+    """
+    r = np.asarray(r, dtype=float)
+    theta = np.asarray(theta, dtype=float)
+    s = 0.5 * (sh_max + sh_min)
+    d = 0.5 * (sh_max - sh_min)
+    q2 = (radius / r) ** 2
+    q4 = q2**2
+    c2 = np.cos(2.0 * theta)
+    s2 = np.sin(2.0 * theta)
+    rr = s * (1.0 - q2) + d * (1.0 - 4.0 * q2 + 3.0 * q4) * c2 + wellbore_pressure * q2
+    tt = s * (1.0 + q2) - d * (1.0 + 3.0 * q4) * c2 - wellbore_pressure * q2
+    rt = -d * (1.0 + 2.0 * q2 - 3.0 * q4) * s2
+    return KirschStress(rr=rr, tt=tt, rt=rt)
+
+
+def kirsch_wall_hoop_stress(
+    theta: ArrayLike, sh_max: float, sh_min: float, wellbore_pressure: float
+) -> FloatArray:
+    """Hoop stress at the wall: SH + Sh - 2 (SH - Sh) cos 2theta - Pw (compression positive)."""
+    theta = np.asarray(theta, dtype=float)
+    return sh_max + sh_min - 2.0 * (sh_max - sh_min) * np.cos(2.0 * theta) - wellbore_pressure
+
+
+def hubbert_willis_breakdown(
+    sh_max: float, sh_min: float, tensile_strength: float, pore_pressure: float = 0.0
+) -> float:
+    """Breakdown pressure of an impermeable borehole: 3 Sh - SH - P0 + T."""
+    return 3.0 * sh_min - sh_max - pore_pressure + tensile_strength
+
+
+def haimson_fairhurst_breakdown(
+    sh_max: float,
+    sh_min: float,
+    tensile_strength: float,
+    pore_pressure: float,
+    biot: float,
+    poisson_ratio: float,
+) -> float:
+    """Breakdown pressure with fluid penetrating the wall (Haimson-Fairhurst)."""
+    eta = biot * (1.0 - 2.0 * poisson_ratio) / (2.0 * (1.0 - poisson_ratio))
+    return (3.0 * sh_min - sh_max + tensile_strength - 2.0 * eta * pore_pressure) / (
+        2.0 * (1.0 - eta)
+    )
+
+
+# ---------------------------------------------------------------------------
+# Plane-strain hydraulic fractures (KGD) and radial fractures
+# ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class KGDState:
+    """Half-length, inlet opening and inlet net pressure of a KGD fracture at time t."""
+
+    half_length: float
+    inlet_opening: float
+    net_pressure: float
+
+
+def kgd_viscosity(
+    time: float, rate: float, youngs_modulus: float, poisson_ratio: float, viscosity: float
+) -> KGDState:
+    """Zero-toughness, no-leak-off KGD solution (``rate`` per unit height, total).
+
+    eps = (mu'/(E' t))^(1/3), L = (E' Q0^3 t^4 / mu')^(1/6), l = 0.61524 L,
+    w(0) = 1.8302 eps l (Omega scaled by l), p_net(0) = 0.54495 eps E'.
+    """
+    e_prime = plane_strain_modulus(youngs_modulus, poisson_ratio)
+    mu_prime = 12.0 * viscosity
+    eps = (mu_prime / (e_prime * time)) ** (1.0 / 3.0)
+    scale = (e_prime * rate**3 * time**4 / mu_prime) ** (1.0 / 6.0)
+    half_length = 0.61524 * scale
+    return KGDState(
+        half_length=half_length,
+        inlet_opening=1.8302 * eps * half_length,
+        net_pressure=0.54495 * eps * e_prime,
+    )
+
+
+def toughness_scale(fracture_toughness: float) -> float:
+    """K' = 4 sqrt(2/pi) KIc."""
+    return 4.0 * np.sqrt(2.0 / np.pi) * fracture_toughness
+
+
+def kgd_toughness(
+    time: float, rate: float, youngs_modulus: float, poisson_ratio: float, fracture_toughness: float
+) -> KGDState:
+    """Toughness-dominated KGD: l = 0.9324 (E' Q0 t / K')^(2/3), p_net = KIc / sqrt(pi l).
+
+    The inlet opening is that of a uniformly pressurised crack, (4 p_net / E') l.
+    """
+    e_prime = plane_strain_modulus(youngs_modulus, poisson_ratio)
+    k_prime = toughness_scale(fracture_toughness)
+    half_length = 0.9324 * (e_prime * rate * time / k_prime) ** (2.0 / 3.0)
+    p_net = fracture_toughness / np.sqrt(np.pi * half_length)
+    return KGDState(
+        half_length=half_length,
+        inlet_opening=4.0 * p_net / e_prime * half_length,
+        net_pressure=p_net,
+    )
+
+
+def radial_toughness_radius(
+    time: float, rate: float, youngs_modulus: float, poisson_ratio: float, fracture_toughness: float
+) -> float:
+    """Toughness-dominated radial fracture: R = 0.8546 (E' Q0 t / K')^(2/5)."""
+    e_prime = plane_strain_modulus(youngs_modulus, poisson_ratio)
+    k_prime = toughness_scale(fracture_toughness)
+    return float(0.8546 * (e_prime * rate * time / k_prime) ** 0.4)
+
+
+# ---------------------------------------------------------------------------
+# Perforation tunnels as stacks of conical frustums
+# ---------------------------------------------------------------------------
+
+
+def frustum_volume(diameters: ArrayLike, stations: ArrayLike) -> float:
+    """Volume of circular sections ``diameters`` at axial ``stations`` joined by frustums."""
+    d = np.asarray(diameters, dtype=float)
+    z = np.asarray(stations, dtype=float)
+    if d.shape != z.shape or d.ndim != 1 or d.size < 2:
+        raise ValueError("diameters and stations must be 1D arrays of equal length >= 2")
+    r0, r1, dz = 0.5 * d[:-1], 0.5 * d[1:], np.diff(z)
+    return float(np.sum(np.pi * dz * (r0**2 + r0 * r1 + r1**2) / 3.0))
+
+
+def frustum_lateral_area(diameters: ArrayLike, stations: ArrayLike) -> float:
+    """Lateral (wall) area of the same stack of frustums, end caps excluded."""
+    d = np.asarray(diameters, dtype=float)
+    z = np.asarray(stations, dtype=float)
+    r0, r1, dz = 0.5 * d[:-1], 0.5 * d[1:], np.diff(z)
+    return float(np.sum(np.pi * (r0 + r1) * np.sqrt(dz**2 + (r1 - r0) ** 2)))
+
+
+def equal_volume_cylinder_diameter(diameters: ArrayLike, stations: ArrayLike) -> float:
+    """Diameter of the cylinder of the same length and volume as the frustum stack."""
+    z = np.asarray(stations, dtype=float)
+    length = float(z[-1] - z[0])
+    return float(2.0 * np.sqrt(frustum_volume(diameters, stations) / (np.pi * length)))

@@ -1,0 +1,181 @@
+"""Pictures people look at: line plots (matplotlib) and field renderings (PyVista).
+
+Rendering happens on rank 0 only; distributed fields are gathered there first.
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+import shutil
+import subprocess
+from collections.abc import Sequence
+from pathlib import Path
+
+import dolfinx
+import dolfinx.plot
+import numpy as np
+from mpi4py import MPI
+
+
+def ensure_display() -> None:
+    """Give VTK an X display: start a private Xvfb when none is set.
+
+    ``-displayfd`` lets Xvfb pick a free display number, so concurrent runs on one
+    machine do not collide.
+    """
+    if os.environ.get("DISPLAY"):
+        return
+    xvfb = shutil.which("Xvfb")
+    if xvfb is None:
+        raise RuntimeError(
+            "no X display and no Xvfb to render pictures; install xvfb or pass --no-pictures"
+        )
+    read_fd, write_fd = os.pipe()
+    proc = subprocess.Popen(
+        [xvfb, "-displayfd", str(write_fd), "-screen", "0", "1280x1024x24", "-nolisten", "tcp"],
+        pass_fds=(write_fd,),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    os.close(write_fd)
+    with os.fdopen(read_fd) as fh:
+        display = fh.readline().strip()
+    if not display:
+        proc.kill()
+        raise RuntimeError("Xvfb did not start; pictures cannot be rendered")
+    os.environ["DISPLAY"] = f":{display}"
+    atexit.register(proc.terminate)
+
+
+def _gather_grid(
+    f: dolfinx.fem.Function,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """Gather the VTK topology, cell types, points and values of ``f`` on rank 0.
+
+    ``f`` is a Lagrange function (point data) or a DG0 function (cell data).
+    """
+    V = f.function_space
+    mesh = V.mesh
+    comm = mesh.comm
+    tdim = mesh.topology.dim
+    owned = np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32)
+    bs = V.dofmap.index_map_bs
+    if V.element.basix_element.discontinuous and V.element.basix_element.degree == 0:
+        topology, types, points = dolfinx.plot.vtk_mesh(mesh, tdim, owned)
+        dofs = np.array([V.dofmap.cell_dofs(int(c))[0] for c in owned], dtype=np.int64)
+        values = f.x.array.reshape(-1, bs)[dofs]
+    else:
+        topology, types, points = dolfinx.plot.vtk_mesh(V)
+        values = f.x.array.reshape(-1, bs)[: len(points)]
+        # keep only owned cells to avoid drawing ghosts twice
+        cells_per = topology.reshape(-1, topology[0] + 1)[: len(owned)]
+        topology = cells_per.ravel()
+        types = types[: len(owned)]
+    parts = comm.gather((topology, types, points, values), root=0)
+    if comm.rank != 0:
+        return None
+    assert parts is not None
+    topo_all, types_all, pts_all, vals_all = [], [], [], []
+    offset = 0
+    for topo, typ, pts, vals in parts:
+        cells = topo.reshape(len(typ), -1).copy()
+        cells[:, 1:] += offset
+        topo_all.append(cells.ravel())
+        types_all.append(typ)
+        pts_all.append(pts)
+        vals_all.append(vals)
+        offset += len(pts)
+    return (
+        np.concatenate(topo_all),
+        np.concatenate(types_all),
+        np.concatenate(pts_all),
+        np.concatenate(vals_all),
+    )
+
+
+def render_field(
+    f: dolfinx.fem.Function,
+    path: str | os.PathLike[str],
+    title: str,
+    scale: float = 1.0,
+    unit: str = "",
+    warp_by: dolfinx.fem.Function | None = None,
+    warp_factor: float = 0.0,
+    cmap: str = "coolwarm",
+    crop: tuple[float, float, float, float] | None = None,
+) -> None:
+    """Render a scalar field to PNG with PyVista, off-screen (collective call).
+
+    ``crop = (xmin, xmax, ymin, ymax)`` keeps only cells whose centres lie inside.
+    """
+    grid_data = _gather_grid(f)
+    warp_data = _gather_grid(warp_by) if warp_by is not None else None
+    if grid_data is None:
+        return
+    ensure_display()
+    import pyvista
+
+    pyvista.OFF_SCREEN = True
+    topology, types, points, values = grid_data
+    grid = pyvista.UnstructuredGrid(topology, types, points)
+    label = f"{title} [{unit}]" if unit else title
+    data = values[:, 0] * scale
+    if len(data) == grid.n_cells:
+        grid.cell_data[label] = data
+    else:
+        grid.point_data[label] = data
+    if warp_data is not None and warp_factor:
+        disp = np.zeros((len(points), 3))
+        disp[:, : warp_data[3].shape[1]] = warp_data[3]
+        grid.points = np.asarray(grid.points) + warp_factor * disp
+    if crop is not None:
+        centres = grid.cell_centers().points
+        inside = (
+            (centres[:, 0] >= crop[0])
+            & (centres[:, 0] <= crop[1])
+            & (centres[:, 1] >= crop[2])
+            & (centres[:, 1] <= crop[3])
+        )
+        grid = grid.extract_cells(np.flatnonzero(inside))
+    plotter = pyvista.Plotter(off_screen=True, window_size=(1000, 800))
+    plotter.add_mesh(
+        grid, scalars=label, cmap=cmap, show_edges=False, scalar_bar_args={"title": label}
+    )
+    plotter.add_mesh(grid.extract_all_edges(), color="black", opacity=0.15, line_width=1)
+    if np.allclose(points[:, 2], 0.0):
+        plotter.view_xy()
+    else:
+        plotter.view_isometric()
+    plotter.add_text(title, font_size=12)
+    plotter.screenshot(str(path))
+    plotter.close()
+
+
+def plot_lines(
+    path: str | os.PathLike[str],
+    curves: Sequence[tuple[np.ndarray, np.ndarray, str, str]],
+    xlabel: str,
+    ylabel: str,
+    title: str,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+) -> None:
+    """Plot ``(x, y, label, style)`` curves to PNG from rank 0."""
+    if comm.rank == 0:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(7, 4.5))
+        for x, y, label, style in curves:
+            ax.plot(x, y, style, label=label)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+        ax.set_title(title)
+        ax.grid(alpha=0.3)
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(Path(path), dpi=120)
+        plt.close(fig)
+    comm.barrier()

@@ -1,0 +1,29 @@
+"""The demos run end to end and reproduce what they claim."""
+
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+
+DEMOS = Path(__file__).resolve().parents[1] / "demos"
+
+
+def load(name):
+    spec = importlib.util.spec_from_file_location(name, DEMOS / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_borehole_kirsch_demo_writes_its_results(shared_tmp_path):
+    out = shared_tmp_path / "kirsch"
+    summary = load("borehole_kirsch").main(["-o", str(out), "--size", "0.007"])
+    assert summary["max_relative_error"] < 0.05
+    assert summary["hoop_stress_theta0_MPa"] == pytest.approx(
+        summary["kirsch_theta0_MPa"], rel=0.05
+    )
+    on_disk = json.loads((out / "summary.json").read_text())
+    assert on_disk["cells"] == summary["cells"]
+    for name in ("fields.xdmf", "fields.h5", "hoop_stress.csv", "hoop_stress.png", "sigma_xx.png"):
+        assert (out / name).stat().st_size > 0, name

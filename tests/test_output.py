@@ -1,0 +1,42 @@
+"""Results on disk are written whole or not at all."""
+
+import json
+import os
+
+import pytest
+from mpi4py import MPI
+
+from hfcdem.output import prepare_output_dir, write_atomic, write_csv, write_json
+
+
+def test_json_and_csv_round_trip(shared_tmp_path):
+    out = prepare_output_dir(shared_tmp_path / "run")
+    write_json(out / "summary.json", {"pressure_MPa": 64.0, "counts": (1, 2)})
+    write_csv(out / "h.csv", ["t", "p"], [(0.0, 1.0), (1.0, 2.5)])
+    assert json.loads((out / "summary.json").read_text()) == {
+        "pressure_MPa": 64.0,
+        "counts": [1, 2],
+    }
+    assert (out / "h.csv").read_text().splitlines() == ["t,p", "0,1", "1,2.5"]
+
+
+@pytest.mark.serial
+def test_failed_write_keeps_the_previous_file(tmp_path):
+    target = tmp_path / "summary.json"
+    target.write_text("good\n")
+
+    class Boom:
+        def __str__(self):
+            raise RuntimeError("interrupted")
+
+    with pytest.raises(TypeError):
+        write_atomic(target, Boom())  # type: ignore[arg-type]
+    assert target.read_text() == "good\n"
+    assert os.listdir(tmp_path) == ["summary.json"]
+
+
+@pytest.mark.serial
+def test_unwritable_output_dir_is_a_clear_error(tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(OSError, match="cannot create output directory"):
+        prepare_output_dir(tmp_path / "file" / "sub", MPI.COMM_SELF)

@@ -1,0 +1,97 @@
+"""Continuous elastic blocks: Kirsch around a borehole, material validation."""
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from hfcdem import analytic
+from hfcdem.meshing import BoreholePlate, create_borehole_plate
+from hfcdem.sampling import evaluate_at_points, interpolate_expression
+from hfcdem.solid import ElasticMaterial, InSituStress, solve_cavity_pressure
+
+MPa = 1e6
+ROCK = ElasticMaterial(21.5e9, 0.25)
+
+
+def wall_hoop_stress(comm, size, sh_max, sh_min, pw, theta):
+    a = 0.035
+    tmesh = create_borehole_plate(BoreholePlate(a, 40 * a, size, 8 * a), comm)
+    sol = solve_cavity_pressure(
+        tmesh,
+        ROCK,
+        InSituStress(sh_max, sh_min),
+        {"wellbore_wall": pw},
+        rollers={"symmetry_x": 0, "symmetry_y": 1},
+    )
+    sigma = interpolate_expression(sol.total_stress, tmesh.mesh, ("DG", 1, (2, 2)))
+    pts = a * (1 + 1e-9) * np.column_stack([np.cos(theta), np.sin(theta)])
+    s = evaluate_at_points(sigma, pts).reshape(-1, 2, 2)
+    c, sn = np.cos(theta), np.sin(theta)
+    return -(s[:, 0, 0] * sn**2 - 2 * s[:, 0, 1] * sn * c + s[:, 1, 1] * c**2), sol
+
+
+@pytest.mark.parametrize(
+    ("sh_max", "sh_min", "pw"), [(38e6, 34e6, 20e6), (6e6, 1e6, 0.0), (10e6, 10e6, 25e6)]
+)
+def test_kirsch_hoop_stress_within_5_percent(sh_max, sh_min, pw):
+    theta = np.array([0.0, np.pi / 2])
+    hoop, _ = wall_hoop_stress(MPI.COMM_WORLD, 0.0035, sh_max, sh_min, pw, theta)
+    ref = analytic.kirsch_wall_hoop_stress(theta, sh_max, sh_min, pw)
+    scale = np.abs(ref).max()
+    assert np.all(np.abs(hoop - ref) <= 0.05 * scale), (hoop / MPa, ref / MPa)
+
+
+def test_kirsch_error_falls_with_mesh_size():
+    theta = np.array([0.0, np.pi / 4, np.pi / 2])
+    ref = analytic.kirsch_wall_hoop_stress(theta, 38e6, 34e6, 20e6)
+    errors = []
+    for size in (0.014, 0.007, 0.0035):
+        hoop, _ = wall_hoop_stress(MPI.COMM_WORLD, size, 38e6, 34e6, 20e6, theta)
+        errors.append(np.abs(hoop - ref).max() / np.abs(ref).max())
+    assert errors[2] < errors[1] < errors[0], errors
+
+
+def test_hydrostatic_state_without_cavity_load_stays_still():
+    # pressure equal to an isotropic in-situ stress: nothing changes, nothing moves
+    a = 0.035
+    tmesh = create_borehole_plate(BoreholePlate(a, 20 * a, 0.007, 4 * a))
+    sol = solve_cavity_pressure(
+        tmesh,
+        ROCK,
+        InSituStress(30e6, 30e6),
+        {"wellbore_wall": 30e6},
+        rollers={"symmetry_x": 0, "symmetry_y": 1},
+    )
+    umax = tmesh.comm.allreduce(np.abs(sol.displacement.x.array).max(initial=0.0), op=MPI.MAX)
+    assert umax < 1e-15
+
+
+def test_rank_independence_of_wall_stress():
+    theta = np.linspace(0, np.pi / 2, 7)
+    world, _ = wall_hoop_stress(MPI.COMM_WORLD, 0.007, 38e6, 34e6, 20e6, theta)
+    alone, _ = wall_hoop_stress(MPI.COMM_SELF, 0.007, 38e6, 34e6, 20e6, theta)
+    assert np.allclose(world, alone, rtol=1e-8, atol=1e-6 * MPa)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"youngs_modulus": -1.0}, "youngs_modulus"),
+        ({"youngs_modulus": 21.5e15}, "youngs_modulus must be in"),
+        ({"poisson_ratio": 0.5}, "poisson_ratio must be in"),
+        ({"poisson_ratio": float("nan")}, "poisson_ratio"),
+    ],
+)
+def test_material_validation_names_the_field(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        ElasticMaterial(**{"youngs_modulus": 21.5e9, "poisson_ratio": 0.25, **kwargs})
+
+
+def test_in_situ_validation_and_rotation():
+    with pytest.raises(ValueError, match="sh_max"):
+        InSituStress(1e6, 2e6)
+    with pytest.raises(ValueError, match="sv must be a stress in Pa"):
+        InSituStress(38e6, 34e6, sv=43e12)
+    rotated = InSituStress(6e6, 1e6, azimuth_sh=90.0).tensor(2)
+    assert np.allclose(rotated, -np.diag([1e6, 6e6]))
+    assert InSituStress(6e6, 1e6, sv=9e6).tensor(3)[2, 2] == -9e6
