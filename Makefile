@@ -28,10 +28,11 @@ demo:
 	@$(CONTAINER) run mpirun -n $(RANKS) python3 demos/borehole_kirsch.py -o results/borehole_kirsch
 	@echo "results: results/borehole_kirsch/ (summary.json, hoop_stress.png, sigma_xx.png, fields.xdmf for ParaView)"
 
-# CMD reaches the shell through the environment, so any quoting in it survives
-run: export CMD := $(CMD)
+# CMD reaches the shell through the environment, unexpanded by make, so quoting
+# and $variables in it survive
+run: export HFCDEM_CMD = $(value CMD)
 run:
-	@$(CONTAINER) run bash -c "$$CMD"
+	@$(CONTAINER) run bash -c "$$HFCDEM_CMD"
 
 shell:
 	@$(CONTAINER) shell

@@ -127,7 +127,11 @@ class BoreholePlate:
     """A 2D plate around a borehole centred at the origin (plane strain).
 
     ``quarter`` keeps x >= 0, y >= 0 with the symmetry lines tagged; otherwise the
-    full square ``[-half_width, half_width]^2`` minus the hole.
+    full square ``[-half_width, half_width]^2`` minus the hole.  ``ring_layers``
+    > 0 meshes that many structured layers of size ``size_at_wall`` around the
+    wall, so radial facets (the planes a breakdown fracture starts on) exist at
+    every angle step, including along the axes.  ``growth`` is the element size
+    increase per metre of distance from the wall.
     """
 
     radius: float
@@ -135,6 +139,8 @@ class BoreholePlate:
     size_at_wall: float
     size_far: float
     quarter: bool = True
+    ring_layers: int = 0
+    growth: float = 0.25
 
     def __post_init__(self) -> None:
         for key in ("radius", "half_width", "size_at_wall", "size_far"):
@@ -151,25 +157,60 @@ class BoreholePlate:
             )
         if self.size_far < self.size_at_wall:
             raise ValueError("size_far must be at least size_at_wall")
+        if not 0 <= self.ring_layers <= 200:
+            raise ValueError(f"ring_layers must be in [0, 200], got {self.ring_layers!r}")
+        if self.radius + self.ring_layers * self.size_at_wall >= self.half_width:
+            raise ValueError("the structured ring around the wall must fit inside the plate")
+        if not 0.01 <= self.growth <= 2.0:
+            raise ValueError(
+                f"growth must be in [0.01, 2] (size per distance), got {self.growth!r}"
+            )
+
+    def _ring_sectors(self, occ: Any, b: float) -> list[int]:
+        """Quarter-annulus surfaces between the wall and radius ``b``."""
+        a = self.radius
+        centre = occ.addPoint(0.0, 0.0, 0.0)
+        angles = [0.0, 0.5 * np.pi] if self.quarter else [0.0, 0.5 * np.pi, np.pi, 1.5 * np.pi]
+        inner = [occ.addPoint(a * np.cos(t), a * np.sin(t), 0.0) for t in angles]
+        outer = [occ.addPoint(b * np.cos(t), b * np.sin(t), 0.0) for t in angles]
+        radial = [occ.addLine(i, o) for i, o in zip(inner, outer, strict=True)]
+        sectors = []
+        count = 1 if self.quarter else 4
+        for k in range(count):
+            k1 = (k + 1) % len(angles)
+            arc_in = occ.addCircleArc(inner[k], centre, inner[k1])
+            arc_out = occ.addCircleArc(outer[k], centre, outer[k1])
+            loop = occ.addCurveLoop([radial[k], arc_out, -radial[k1], -arc_in])
+            sectors.append(occ.addPlaneSurface([loop]))
+        return sectors
 
     def build(self, model: Any) -> None:
         """Create the Gmsh geometry, groups and mesh of the plate."""
         occ = model.occ
         w, a = self.half_width, self.radius
+        b = a + self.ring_layers * self.size_at_wall
         if self.quarter:
             plate = occ.addRectangle(0.0, 0.0, 0.0, w, w)
         else:
             plate = occ.addRectangle(-w, -w, 0.0, 2.0 * w, 2.0 * w)
-        hole = occ.addDisk(0.0, 0.0, 0.0, a, a)
-        (rock, *_), _ = occ.cut([(2, plate)], [(2, hole)])
+        hole = occ.addDisk(0.0, 0.0, 0.0, b, b)
+        occ.cut([(2, plate)], [(2, hole)])
+        if self.ring_layers:
+            self._ring_sectors(occ, b)
+            occ.removeAllDuplicates()
         occ.synchronize()
-        model.addPhysicalGroup(2, [rock[1]], name="rock")
+        surfaces = [t for _, t in model.getEntities(2)]
+        model.addPhysicalGroup(2, surfaces, name="rock")
 
         groups: dict[str, list[int]] = {}
         tol = max(1e-6 * w, 1e-6)  # OCC pads bounding boxes by about 1e-7
-        for _, curve in model.getBoundary([rock], oriented=False):
+        boundary = {c for _, c in model.getBoundary([(2, t) for t in surfaces], oriented=False)}
+        for curve in sorted(boundary):
             x0, y0, _, x1, y1, _ = model.getBoundingBox(1, curve)
-            if model.getType(1, curve) in ("Circle", "Ellipse"):
+            if (
+                model.getType(1, curve) in ("Circle", "Ellipse")
+                and max(abs(x0), abs(x1), abs(y0), abs(y1)) < a + tol
+            ):
                 key = "wellbore_wall"
             elif abs(x0) < tol and abs(x1) < tol:
                 key = "symmetry_x"
@@ -181,22 +222,117 @@ class BoreholePlate:
         for key, curves in sorted(groups.items()):
             model.addPhysicalGroup(1, curves, name=key)
 
-        # grade from the wall size to the far-field size over the plate
-        dist = model.mesh.field.add("Distance")
-        model.mesh.field.setNumbers(dist, "CurvesList", groups["wellbore_wall"])
-        model.mesh.field.setNumber(dist, "Sampling", 200)
-        thr = model.mesh.field.add("Threshold")
-        model.mesh.field.setNumber(thr, "InField", dist)
-        model.mesh.field.setNumber(thr, "SizeMin", self.size_at_wall)
-        model.mesh.field.setNumber(thr, "SizeMax", self.size_far)
-        model.mesh.field.setNumber(thr, "DistMin", 0.0)
-        model.mesh.field.setNumber(thr, "DistMax", 0.5 * w)
-        model.mesh.field.setAsBackgroundMesh(thr)
-        for opt in ("MeshSizeFromPoints", "MeshSizeFromCurvature", "MeshSizeExtendFromBoundary"):
-            gmsh.option.setNumber(f"Mesh.{opt}", 0)
+        if self.ring_layers:
+            # structured layers: arcs divided evenly, radial lines into ring_layers
+            for _, curve in model.getEntities(1):
+                x0, y0, _, x1, y1, _ = model.getBoundingBox(1, curve)
+                if max(abs(x0), abs(x1), abs(y0), abs(y1)) > b + tol:
+                    continue
+                if model.getType(1, curve) in ("Circle", "Ellipse"):
+                    # same count on inner and outer arcs (transfinite needs it)
+                    n = max(2, int(np.ceil(0.5 * np.pi * a / self.size_at_wall)))
+                    model.mesh.setTransfiniteCurve(curve, n + 1)
+                else:
+                    model.mesh.setTransfiniteCurve(curve, self.ring_layers + 1)
+            for _, surf in model.getEntities(2):
+                x0, y0, _, x1, y1, _ = model.getBoundingBox(2, surf)
+                if max(abs(x0), abs(x1), abs(y0), abs(y1)) <= b + tol:
+                    model.mesh.setTransfiniteSurface(surf)
+        reach = (self.size_far - self.size_at_wall) / self.growth
+        _grade_from(
+            model, 1, groups["wellbore_wall"], self.size_at_wall, self.size_far, b - a + reach
+        )
         model.mesh.generate(2)
 
 
 def create_borehole_plate(plate: BoreholePlate, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
     """Mesh ``plate`` on rank 0 and distribute it over ``comm``."""
     return mesh_from_gmsh(plate.build, comm, gdim=2, name="borehole_plate")
+
+
+def _grade_from(
+    model: Any, dim: int, tags: list[int], size_min: float, size_max: float, dist_max: float
+) -> None:
+    """Element size growing linearly from ``size_min`` at the entities to ``size_max``."""
+    dist = model.mesh.field.add("Distance")
+    model.mesh.field.setNumbers(dist, "CurvesList" if dim == 1 else "SurfacesList", tags)
+    model.mesh.field.setNumber(dist, "Sampling", 400)
+    thr = model.mesh.field.add("Threshold")
+    model.mesh.field.setNumber(thr, "InField", dist)
+    model.mesh.field.setNumber(thr, "SizeMin", size_min)
+    model.mesh.field.setNumber(thr, "SizeMax", size_max)
+    model.mesh.field.setNumber(thr, "DistMin", 0.0)
+    model.mesh.field.setNumber(thr, "DistMax", dist_max)
+    model.mesh.field.setAsBackgroundMesh(thr)
+    for opt in ("MeshSizeFromPoints", "MeshSizeFromCurvature", "MeshSizeExtendFromBoundary"):
+        gmsh.option.setNumber(f"Mesh.{opt}", 0)
+
+
+@dataclass(frozen=True)
+class CrackPlate:
+    """A 2D plate ``[-half_width, half_width]^2`` with a central crack on y = 0.
+
+    The crack (facet group ``"crack"``) runs from ``-half_length`` to
+    ``half_length``; it is embedded, so its facets are interior facets that the
+    CDEM solid treats as a pre-existing open interface.  ``half_model`` keeps
+    x >= 0 with ``"symmetry_x"`` tagged.  The element size grows from
+    ``size_at_crack`` along the crack to ``size_far`` over ``grading`` metres.
+    """
+
+    half_length: float
+    half_width: float
+    size_at_crack: float
+    size_far: float
+    half_model: bool = True
+    growth: float = 0.25
+
+    def __post_init__(self) -> None:
+        for key in ("half_length", "half_width", "size_at_crack", "size_far"):
+            value = getattr(self, key)
+            if not np.isfinite(value) or value <= 0.0:
+                raise ValueError(f"{key} must be a positive length in m, got {value!r}")
+        if self.half_width <= self.half_length:
+            raise ValueError("half_width must exceed the crack half_length")
+        if self.size_at_crack > self.half_length / 2:
+            raise ValueError("size_at_crack must resolve the crack: at most half_length / 2")
+        if self.size_far < self.size_at_crack:
+            raise ValueError("size_far must be at least size_at_crack")
+        if not 0.01 <= self.growth <= 2.0:
+            raise ValueError(
+                f"growth must be in [0.01, 2] (size per distance), got {self.growth!r}"
+            )
+
+    def build(self, model: Any) -> None:
+        """Create the Gmsh geometry, groups and mesh of the plate."""
+        occ = model.occ
+        w, a = self.half_width, self.half_length
+        x0 = 0.0 if self.half_model else -w
+        plate = occ.addRectangle(x0, -w, 0.0, w - x0, 2.0 * w)
+        p0 = occ.addPoint(0.0 if self.half_model else -a, 0.0, 0.0)
+        p1 = occ.addPoint(a, 0.0, 0.0)
+        crack = occ.addLine(p0, p1)
+        occ.fragment([(2, plate)], [(1, crack)])
+        occ.synchronize()
+        surfaces = [t for _, t in model.getEntities(2)]
+        model.addPhysicalGroup(2, surfaces, name="rock")
+        tol = 1e-7 + 1e-9 * w
+        groups: dict[str, list[int]] = {}
+        for _, curve in model.getEntities(1):
+            bx0, by0, _, bx1, by1, _ = model.getBoundingBox(1, curve)
+            if abs(by0) < tol and abs(by1) < tol and bx1 <= a + tol:
+                key = "crack"
+            elif self.half_model and abs(bx0) < tol and abs(bx1) < tol:
+                key = "symmetry_x"
+            else:
+                key = "outer"
+            groups.setdefault(key, []).append(curve)
+        for key, curves in sorted(groups.items()):
+            model.addPhysicalGroup(1, curves, name=key)
+        reach = (self.size_far - self.size_at_crack) / self.growth
+        _grade_from(model, 1, groups["crack"], self.size_at_crack, self.size_far, reach)
+        model.mesh.generate(2)
+
+
+def create_crack_plate(plate: CrackPlate, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
+    """Mesh ``plate`` on rank 0 and distribute it over ``comm``."""
+    return mesh_from_gmsh(plate.build, comm, gdim=2, name="crack_plate")

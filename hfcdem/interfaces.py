@@ -1,0 +1,177 @@
+"""Breakable interfaces between blocks: geometry, strengths, states and failure.
+
+Every facet of the fracturable zone carries a normal and a tangential spring.
+Its state is one of
+
+- ``INTACT`` (0): springs carry the in-situ traction plus ``K [u]``;
+- ``TENSILE`` (1) or ``SHEAR`` (2): broken; open faces carry the fluid pressure,
+  closed faces resist interpenetration and slide with Coulomb friction.
+
+These numbers are what the output writes (the paper's Fig. 17 uses 0/1/2).
+This module is plain NumPy: the DOLFINx side lives in :mod:`hfcdem.cdem`.
+Tractions are *tension positive*; strengths are positive numbers.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import IntEnum
+
+import numpy as np
+import numpy.typing as npt
+
+
+class FacetState(IntEnum):
+    """Failure state of an interface."""
+
+    INTACT = 0
+    TENSILE = 1
+    SHEAR = 2
+
+
+BREAK_RULES = ("all", "most_overstressed", "cap")
+
+
+@dataclass(frozen=True)
+class InterfaceModel:
+    """Spring stiffness, strength and post-failure behaviour of the interfaces.
+
+    - ``alpha``: normal stiffness per area ``kn = alpha E / h`` (h: facet's mean
+      cell diameter); ``shear_ratio`` gives ``ks = shear_ratio * kn`` (default
+      ``1 / (2 (1 + nu))``, the ratio G/E, when None).
+    - ``tensile_strength`` T0 and ``cohesion`` c0 in Pa, ``friction_angle`` phi in
+      degrees: intact interfaces break in tension when ``t_n >= T0`` and in shear
+      when ``|tau| >= c0 + sigma_n tan(phi)`` (sigma_n compression positive).
+      A tensile check wins when both hold.
+    - ``weibull_modulus`` m > 0 scatters T0 and c0 per facet with a Weibull law of
+      the same mean, reproducibly for ``seed`` and independent of the rank count.
+    - ``break_rule``: ``"all"`` breaks every overstressed interface at once,
+      ``"most_overstressed"`` only the worst one and then re-solves,
+      ``"cap"`` the ``max_breaks`` worst ones.
+    """
+
+    alpha: float = 100.0
+    shear_ratio: float | None = None
+    tensile_strength: float = math.inf
+    cohesion: float = math.inf
+    friction_angle: float = 30.0
+    weibull_modulus: float | None = None
+    seed: int = 0
+    break_rule: str = "most_overstressed"
+    max_breaks: int = 1
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.alpha) and 0.0 < self.alpha <= 1e12):
+            raise ValueError(f"alpha must be in (0, 1e12] (kn = alpha E / h), got {self.alpha!r}")
+        if self.shear_ratio is not None and not (
+            math.isfinite(self.shear_ratio) and 0.0 <= self.shear_ratio <= 10.0
+        ):
+            raise ValueError(f"shear_ratio must be in [0, 10], got {self.shear_ratio!r}")
+        for key in ("tensile_strength", "cohesion"):
+            value = getattr(self, key)
+            if math.isnan(value) or value < 0.0 or (math.isfinite(value) and value > 1e10):
+                raise ValueError(f"{key} must be in [0, 1e10] Pa (or inf), got {value!r}")
+        if not (math.isfinite(self.friction_angle) and 0.0 <= self.friction_angle < 90.0):
+            raise ValueError(f"friction_angle must be in [0, 90) deg, got {self.friction_angle!r}")
+        if self.weibull_modulus is not None and not (
+            math.isfinite(self.weibull_modulus) and 0.1 <= self.weibull_modulus <= 1e3
+        ):
+            raise ValueError(
+                f"weibull_modulus must be in [0.1, 1000], got {self.weibull_modulus!r}"
+            )
+        if self.break_rule not in BREAK_RULES:
+            raise ValueError(f"break_rule must be one of {BREAK_RULES}, got {self.break_rule!r}")
+        if self.max_breaks < 1:
+            raise ValueError(f"max_breaks must be >= 1, got {self.max_breaks!r}")
+
+    @property
+    def friction(self) -> float:
+        """Friction coefficient tan(phi)."""
+        return math.tan(math.radians(self.friction_angle))
+
+    def shear_stiffness_ratio(self, poisson_ratio: float) -> float:
+        """Return ks / kn."""
+        if self.shear_ratio is not None:
+            return self.shear_ratio
+        return 1.0 / (2.0 * (1.0 + poisson_ratio))
+
+
+def stable_facet_hash(vertex_ids: npt.NDArray[np.int64], seed: int) -> npt.NDArray[np.float64]:
+    """Uniform numbers in (0, 1) from sorted global vertex ids of each facet (rows).
+
+    SplitMix64 over the ids: the same facet gets the same number on any number of
+    ranks and in any ordering.
+    """
+    ids = np.sort(np.asarray(vertex_ids, dtype=np.int64), axis=1).astype(np.uint64)
+    mask = np.uint64(0xFFFFFFFFFFFFFFFF)
+    with np.errstate(over="ignore"):
+        h = np.full(ids.shape[0], np.uint64(seed) * np.uint64(0x9E3779B97F4A7C15) & mask)
+        for col in range(ids.shape[1]):
+            h = h ^ ids[:, col]
+            h = h + np.uint64(0x9E3779B97F4A7C15)
+            z = h
+            z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+            z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+            h = z ^ (z >> np.uint64(31))
+    return (h >> np.uint64(11)).astype(np.float64) / float(1 << 53) * (1.0 - 2e-16) + 1e-16
+
+
+def weibull_scatter(mean: float, modulus: float, uniform: npt.NDArray[np.float64]) -> np.ndarray:
+    """Weibull-distributed values of the given ``mean`` and shape ``modulus``."""
+    if not math.isfinite(mean):
+        return np.full(uniform.shape, mean)
+    scale = mean / math.gamma(1.0 + 1.0 / modulus)
+    return scale * (-np.log1p(-uniform)) ** (1.0 / modulus)
+
+
+@dataclass(frozen=True)
+class Overstress:
+    """Per-facet failure check: which criterion is exceeded and by how much."""
+
+    ratio: np.ndarray  # max over criteria of demand / strength; >= 1 means failure
+    mode: np.ndarray  # FacetState the facet would break into
+
+
+def check_failure(
+    normal_traction: np.ndarray,
+    shear_traction: np.ndarray,
+    tensile_strength: np.ndarray,
+    cohesion: np.ndarray,
+    friction: float,
+) -> Overstress:
+    """Tension cut-off and Mohr-Coulomb checks (tension-positive normal traction)."""
+    tn = np.asarray(normal_traction, dtype=float)
+    tau = np.abs(np.asarray(shear_traction, dtype=float))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tensile = np.where(tn > 0.0, tn / tensile_strength, 0.0)
+        tensile = np.where((tn > 0.0) & (tensile_strength == 0.0), np.inf, tensile)
+        shear_strength = cohesion - tn * friction  # sigma_n = -t_n (compression positive)
+        shear = np.where(
+            shear_strength > 0.0, tau / shear_strength, np.where(tau > 0.0, np.inf, 0.0)
+        )
+        shear = np.nan_to_num(shear, nan=0.0)
+    ratio = np.maximum(tensile, shear)
+    # the tension cut-off wins whenever it is reached
+    mode = np.where((tensile >= 1.0) | (tensile >= shear), FacetState.TENSILE, FacetState.SHEAR)
+    return Overstress(ratio=ratio, mode=mode.astype(np.int8))
+
+
+def select_breaking(
+    ratio: np.ndarray, keys: np.ndarray, rule: str, max_breaks: int, comm
+) -> np.ndarray:
+    """Local indices of facets to break this iteration (collective).
+
+    ``ratio`` >= 1 marks overstressed facets; ``keys`` (rows of floats, e.g.
+    midpoint coordinates) break ties the same way on any number of ranks.
+    """
+    over = np.flatnonzero(ratio >= 1.0)
+    if rule == "all":
+        return over
+    count = 1 if rule == "most_overstressed" else max_breaks
+    # candidates from every rank, ordered by ratio then by position
+    local = [(-float(ratio[i]), *map(float, keys[i]), comm.rank, int(i)) for i in over]
+    local.sort()
+    gathered = comm.allgather(local[:count])
+    chosen = sorted(c for part in gathered for c in part)[:count]
+    return np.array([c[-1] for c in chosen if c[-2] == comm.rank], dtype=np.int64)
