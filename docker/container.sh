@@ -124,10 +124,11 @@ build() {
 ensure_image() {
     if image_exists "$image"; then return 0; fi
     build base "$image"
-    # keep only the current dependency image: old ones are gigabytes each
+    # keep only the current dependency image (old ones are gigabytes each); an
+    # image still used by a running container is left alone
     if [ "$engine" = podman ]; then
         podman images --format '{{.Repository}}:{{.Tag}}' | grep '^localhost/hfcdem-base:' \
-            | grep -v ":$dockerfile_hash\$" | xargs -r podman rmi -f >/dev/null 2>&1 || true
+            | grep -v ":$dockerfile_hash\$" | xargs -r podman rmi >/dev/null 2>&1 || true
     fi
 }
 
