@@ -212,7 +212,12 @@ class CDEMSolid:
 
     def _facet_geometry(self) -> None:
         mesh, tdim, gdim = self.mesh, self.mesh.topology.dim, self.gdim
-        nodes = dolfinx.mesh.entities_to_geometry(mesh, tdim - 1, self.facets, False)
+        # DOLFINx divides by the entity count: a rank without interfaces must not ask
+        nverts = tdim
+        if self.num_facets:
+            nodes = dolfinx.mesh.entities_to_geometry(mesh, tdim - 1, self.facets, False)
+        else:
+            nodes = np.zeros((0, nverts), dtype=np.int32)
         x = mesh.geometry.x[nodes][..., :gdim]  # (F, nverts, gdim)
         self.vertex_coords = mesh.geometry.x[nodes]
         self.midpoints = self.vertex_coords.mean(axis=1)
@@ -226,11 +231,19 @@ class CDEMSolid:
             normals = cr
         normals /= np.linalg.norm(normals, axis=1)[:, None]
         # orient n+ out of the first cell
-        cmid = dolfinx.mesh.compute_midpoints(mesh, tdim, self.cells[:, 0])[:, :gdim]
+        cmid = (
+            dolfinx.mesh.compute_midpoints(mesh, tdim, self.cells[:, 0])[:, :gdim]
+            if self.num_facets
+            else np.zeros((0, gdim))
+        )
         flip = np.einsum("ij,ij->i", normals, self.midpoints[:, :gdim] - cmid) < 0.0
         normals[flip] *= -1.0
         self.normals = normals
-        hc = mesh.h(tdim, self.cells.reshape(-1)).reshape(-1, 2)
+        hc = (
+            mesh.h(tdim, self.cells.reshape(-1)).reshape(-1, 2)
+            if self.num_facets
+            else np.zeros((0, 2))
+        )
         self.h = hc.mean(axis=1)
         self.kn = self.model.alpha * self.material.youngs_modulus / self.h
         self.ks = self.kn * self.model.shear_stiffness_ratio(self.material.poisson_ratio)
@@ -370,7 +383,9 @@ class CDEMSolid:
             L += -ufl.inner((pf("+") * eye + sigma0) * npl, ufl.jump(v)) * dS(
                 _OPEN, metadata={"quadrature_degree": 1}
             )
-        if np.any(self.contact == SLIP) and loads.in_situ_factor != 0.0:
+        # collective decision: building the facet function is collective
+        any_slip = self.comm.allreduce(bool(np.any(self.contact == SLIP)), op=MPI.LOR)
+        if any_slip and loads.in_situ_factor != 0.0:
             # friction minus in-situ shear on sliding faces, per facet (+ side); a unit
             # load (no in-situ part) is the linearisation about the current slip set
             tf = self._facet_function(self.friction_traction, (gdim,))

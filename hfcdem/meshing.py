@@ -336,3 +336,66 @@ class CrackPlate:
 def create_crack_plate(plate: CrackPlate, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
     """Mesh ``plate`` on rank 0 and distribute it over ``comm``."""
     return mesh_from_gmsh(plate.build, comm, gdim=2, name="crack_plate")
+
+
+@dataclass(frozen=True)
+class PennyBlock:
+    """A quarter block ``[0, w] x [0, w] x [-w, w]`` with a penny crack of ``radius`` at z = 0.
+
+    The crack (facet group ``"crack"``) is an embedded quarter disk centred on
+    the z axis; ``"symmetry_x"`` and ``"symmetry_y"`` are the cut planes, the
+    rest of the boundary is ``"outer"``.
+    """
+
+    radius: float
+    half_width: float
+    size_at_crack: float
+    size_far: float
+    growth: float = 0.3
+
+    def __post_init__(self) -> None:
+        for key in ("radius", "half_width", "size_at_crack", "size_far"):
+            value = getattr(self, key)
+            if not np.isfinite(value) or value <= 0.0:
+                raise ValueError(f"{key} must be a positive length in m, got {value!r}")
+        if self.half_width <= 2.0 * self.radius:
+            raise ValueError("half_width must exceed twice the crack radius")
+        if self.size_at_crack > self.radius / 2:
+            raise ValueError("size_at_crack must resolve the crack: at most radius / 2")
+        if self.size_far < self.size_at_crack:
+            raise ValueError("size_far must be at least size_at_crack")
+
+    def build(self, model: Any) -> None:
+        """Create the Gmsh geometry, groups and mesh of the block."""
+        occ = model.occ
+        w, a = self.half_width, self.radius
+        box = occ.addBox(0.0, 0.0, -w, w, w, 2.0 * w)
+        disk = occ.addDisk(0.0, 0.0, 0.0, a, a)
+        square = occ.addRectangle(0.0, 0.0, 0.0, a, a)
+        quarter, _ = occ.intersect([(2, disk)], [(2, square)])
+        occ.fragment([(3, box)], quarter)
+        occ.synchronize()
+        model.addPhysicalGroup(3, [t for _, t in model.getEntities(3)], name="rock")
+        tol = 1e-7 + 1e-9 * w
+        groups: dict[str, list[int]] = {}
+        for _, surf in model.getEntities(2):
+            x0, y0, z0, x1, y1, z1 = model.getBoundingBox(2, surf)
+            if abs(z0) < tol and abs(z1) < tol and max(x1, y1) <= a + tol:
+                key = "crack"
+            elif abs(x0) < tol and abs(x1) < tol:
+                key = "symmetry_x"
+            elif abs(y0) < tol and abs(y1) < tol:
+                key = "symmetry_y"
+            else:
+                key = "outer"
+            groups.setdefault(key, []).append(surf)
+        for key, surfs in sorted(groups.items()):
+            model.addPhysicalGroup(2, surfs, name=key)
+        reach = (self.size_far - self.size_at_crack) / self.growth
+        _grade_from(model, 2, groups["crack"], self.size_at_crack, self.size_far, reach)
+        model.mesh.generate(3)
+
+
+def create_penny_block(block: PennyBlock, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
+    """Mesh ``block`` on rank 0 and distribute it over ``comm``."""
+    return mesh_from_gmsh(block.build, comm, gdim=3, name="penny_block")

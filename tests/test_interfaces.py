@@ -86,7 +86,11 @@ def test_break_rules_pick_the_same_facets_on_any_rank_count():
     keys_all = np.arange(18, dtype=float).reshape(6, 3)
     mine = np.arange(comm.rank, 6, comm.size)
     ratio, keys = ratio_all[mine], keys_all[mine]
-    for rule, count, expected in (("all", 1, {1, 2, 3, 4, 5}), ("most_overstressed", 1, {2}), ("cap", 3, {2, 5, 4})):
+    for rule, count, expected in (
+        ("all", 1, {1, 2, 3, 4, 5}),
+        ("most_overstressed", 1, {2}),
+        ("cap", 3, {2, 5, 4}),
+    ):
         chosen = select_breaking(ratio, keys, rule, count, comm)
         picked = set().union(*comm.allgather({int(mine[i]) for i in chosen}))
         assert picked == expected, rule

@@ -39,7 +39,10 @@ def test_tag_names_are_the_api(quarter):
 def test_symmetry_facets_lie_on_their_planes(quarter):
     mesh = quarter.mesh
     for name, axis in (("symmetry_x", 0), ("symmetry_y", 1)):
-        verts = dolfinx.mesh.entities_to_geometry(mesh, 1, quarter.facets(name))
+        facets = quarter.facets(name)
+        if len(facets) == 0:  # DOLFINx divides by the count; this rank holds none
+            continue
+        verts = dolfinx.mesh.entities_to_geometry(mesh, 1, facets, False)
         assert np.allclose(mesh.geometry.x[verts][..., axis], 0.0)
 
 

@@ -1,0 +1,263 @@
+"""The CDEM solid against closed-form solutions (CI-sized meshes).
+
+Finer-mesh figures come from benchmarks/cdem_verification.py.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from hfcdem import analytic
+from hfcdem.cdem import CDEMSolid, Loads
+from hfcdem.interfaces import FacetState, InterfaceModel
+from hfcdem.meshing import (
+    BoreholePlate,
+    CrackPlate,
+    PennyBlock,
+    create_borehole_plate,
+    create_crack_plate,
+    create_penny_block,
+)
+from hfcdem.sampling import evaluate_at_points, interpolate_expression
+from hfcdem.solid import ElasticMaterial, InSituStress
+
+MPa = 1e6
+E, NU, P, A = 210e9, 0.25, 22e6, 0.1  # Table 1 of the perforation paper
+STEEL = ElasticMaterial(E, NU)
+NO_ZONE = None
+
+
+def no_zone(x):
+    return np.zeros(x.shape[1], dtype=bool)
+
+
+def crack_opening(solid, x, axis=1):
+    """Opening across the crack plane y = 0 (2D) or z = 0 (3D) at points x."""
+    x = np.atleast_2d(x)
+    up, down = x.copy(), x.copy()
+    up[:, axis] = 1e-10
+    down[:, axis] = -1e-10
+    return evaluate_at_points(solid.u, up)[:, axis] - evaluate_at_points(solid.u, down)[:, axis]
+
+
+def sneddon_solid(size, comm=MPI.COMM_WORLD, zone=no_zone, alpha=100.0, sigma0=0.0, pressure=P):
+    tmesh = create_crack_plate(CrackPlate(A, 50 * A, size, 10 * A), comm)
+    solid = CDEMSolid(
+        tmesh,
+        STEEL,
+        InSituStress(sigma0, sigma0),
+        InterfaceModel(alpha=alpha),
+        zone=zone,
+        degree=2,
+        rollers={"symmetry_x": 0},
+        fixed=["outer"],
+    )
+    solid.solve(Loads(crack_pressure=pressure))
+    return solid
+
+
+def test_sneddon_centre_opening_within_3_percent_and_converging():
+    errors = []
+    for size in (A / 10, A / 20, A / 40):
+        solid = sneddon_solid(size)
+        w0 = crack_opening(solid, [[1e-9, 0.0]])[0]
+        errors.append(abs(w0 / analytic.sneddon_opening(0.0, A, P, E, NU) - 1))
+    assert errors[0] <= 0.03
+    assert errors[2] < errors[1] < errors[0], errors
+
+
+def test_sneddon_profile_at_ten_points():
+    solid = sneddon_solid(A / 20)
+    x = np.linspace(0.0, 0.9 * A, 10)
+    w = crack_opening(solid, np.column_stack([x, np.zeros_like(x)]))
+    ref = analytic.sneddon_opening(x, A, P, E, NU)
+    assert np.all(np.abs(w / ref - 1) < 0.03), w / ref - 1
+
+
+def test_griffith_opening_scales_with_net_pressure():
+    # background stress normal to the crack (compression positive) subtracts from p
+    sigma0 = 5 * MPa
+    loaded = crack_opening(sneddon_solid(A / 20, sigma0=sigma0), [[1e-9, 0.0]])[0]
+    net = crack_opening(sneddon_solid(A / 20, pressure=P - sigma0), [[1e-9, 0.0]])[0]
+    assert loaded == pytest.approx(net, rel=1e-8)
+    ref = analytic.sneddon_opening(0.0, A, P - sigma0, E, NU)
+    assert loaded == pytest.approx(ref, rel=0.03)
+
+
+def test_springs_in_the_zone_converge_to_the_glued_solution_with_alpha():
+    box = lambda x: (np.abs(x[0]) < 3 * A) & (np.abs(x[1]) < 2 * A)  # noqa: E731
+    glued = crack_opening(sneddon_solid(A / 10), [[1e-9, 0.0]])[0]
+    diffs = [
+        abs(crack_opening(sneddon_solid(A / 10, zone=box, alpha=al), [[1e-9, 0.0]])[0] / glued - 1)
+        for al in (10.0, 100.0, 1000.0)
+    ]
+    assert diffs[2] < diffs[1] < diffs[0]
+    assert diffs[2] < 0.01
+
+
+def test_penny_crack_centre_opening_within_5_percent():
+    a = A
+    tmesh = create_penny_block(PennyBlock(a, 10 * a, a / 4, 2.5 * a))
+    solid = CDEMSolid(
+        tmesh,
+        STEEL,
+        InSituStress(0, 0),
+        InterfaceModel(),
+        zone=no_zone,
+        degree=2,
+        rollers={"symmetry_x": 0, "symmetry_y": 1},
+        fixed=["outer"],
+    )
+    solid.solve(Loads(crack_pressure=P))
+    w0 = crack_opening(solid, [[1e-9, 1e-9, 0.0]], axis=2)[0]
+    assert w0 == pytest.approx(analytic.penny_opening(0.0, a, P, E, NU), rel=0.05)
+
+
+ROCK = ElasticMaterial(21.5e9, 0.25)
+RADIUS = 0.035
+
+
+def borehole_solid(sh_ratio, comm=MPI.COMM_WORLD, size=RADIUS / 10, model=None, quarter=False):
+    plate = BoreholePlate(RADIUS, 40 * RADIUS, size, 8 * RADIUS, quarter=quarter, ring_layers=4)
+    tmesh = create_borehole_plate(plate, comm)
+    sh = 10 * MPa
+    model = model or InterfaceModel(
+        alpha=100, tensile_strength=3 * MPa, cohesion=17 * MPa, friction_angle=40
+    )
+    kwargs = {"rollers": {"symmetry_x": 0, "symmetry_y": 1}} if quarter else {"fixed": ["outer"]}
+    return CDEMSolid(
+        tmesh,
+        ROCK,
+        InSituStress(sh_ratio * sh, sh),
+        model,
+        zone=lambda x: np.hypot(x[0], x[1]) < 4 * RADIUS,
+        degree=2,
+        **kwargs,
+    )
+
+
+def ramp_wellbore(solid, max_pressure=200 * MPa):
+    return solid.ramp(
+        Loads(cavity={"wellbore_wall": 0.0}),
+        Loads(cavity={"wellbore_wall": 1.0}, in_situ_factor=0.0),
+        max_pressure,
+    )
+
+
+def test_kirsch_hoop_stress_with_springs_in_the_zone():
+    solid = borehole_solid(1.5, quarter=True)
+    pw = 5 * MPa
+    solid.solve(Loads(cavity={"wellbore_wall": pw}))
+    sigma = interpolate_expression(solid.total_stress(), solid.mesh, ("DG", 1, (2, 2)))
+    theta = np.array([0.0, np.pi / 2])
+    r = RADIUS * (1 + 1e-9)
+    s = evaluate_at_points(sigma, r * np.column_stack([np.cos(theta) + 1e-6, np.sin(theta) + 1e-6]))
+    s = s.reshape(-1, 2, 2)
+    hoop = -np.array([s[0, 1, 1], s[1, 0, 0]])
+    ref = analytic.kirsch_wall_hoop_stress(theta, 15 * MPa, 10 * MPa, pw)
+    assert np.all(np.abs(hoop - ref) <= 0.05 * np.abs(ref).max()), (hoop / MPa, ref / MPa)
+
+
+@pytest.mark.parametrize("ratio", [1.0, 1.3, 1.7])
+def test_hubbert_willis_breakdown(ratio):
+    solid = borehole_solid(ratio)
+    pb = ramp_wellbore(solid)
+    ref = analytic.hubbert_willis_breakdown(ratio * 10 * MPa, 10 * MPa, 3 * MPa)
+    assert pb == pytest.approx(ref, rel=0.10)
+    first = solid.events[0]
+    assert np.all(first.modes == FacetState.TENSILE)
+    if ratio > 1.0:
+        # the first crack opens against Sh: it lies along SH (the x axis)
+        angle = np.degrees(np.arctan2(np.abs(first.midpoints[:, 1]), np.abs(first.midpoints[:, 0])))
+        assert np.all(angle < 5.0), angle
+
+
+def test_breakdown_pressure_and_broken_set_are_rank_independent():
+    world = borehole_solid(1.3)
+    alone = borehole_solid(1.3, comm=MPI.COMM_SELF)
+    assert ramp_wellbore(world) == pytest.approx(ramp_wellbore(alone), rel=1e-9)
+    mids_world = world.midpoints[world.owned & (world.state != FacetState.INTACT)]
+    gathered = np.concatenate(MPI.COMM_WORLD.allgather(mids_world))
+    mids_alone = alone.midpoints[alone.state != FacetState.INTACT]
+    key = lambda m: sorted(map(tuple, np.round(m, 9)))  # noqa: E731
+    assert key(gathered) == key(mids_alone)
+    assert world.broken_counts() == alone.broken_counts()
+
+
+def test_intact_block_under_in_situ_stress_stays_intact_and_still():
+    solid = borehole_solid(1.5)
+    solid.equilibrate(Loads(cavity={}))  # no excavation load: wall traction left as in situ
+    umax = solid.comm.allreduce(np.abs(solid.u.x.array).max(initial=0.0), op=MPI.MAX)
+    assert umax == 0.0
+    assert solid.fracture_degree() == 0.0
+
+
+@pytest.mark.parametrize("alpha", [1e6])
+def test_very_stiff_springs_solve_without_nan(alpha):
+    solid = borehole_solid(1.5, model=InterfaceModel(alpha=alpha, tensile_strength=3 * MPa))
+    solid.solve(Loads(cavity={"wellbore_wall": 10 * MPa}))
+    assert np.all(np.isfinite(solid.u.x.array))
+    pb = ramp_wellbore(solid)
+    assert pb == pytest.approx(analytic.hubbert_willis_breakdown(15e6, 10e6, 3e6), rel=0.10)
+
+
+@pytest.mark.parametrize(
+    ("t0", "c0"), [(1.0, 17 * MPa), (3 * MPa, 1.0), (0.0, 0.0)], ids=["T0->0", "c0->0", "both 0"]
+)
+def test_vanishing_strengths_solve_or_diagnose_without_nan(t0, c0):
+    weak = InterfaceModel(tensile_strength=t0, cohesion=c0, friction_angle=40.0, break_rule="all")
+    solid = borehole_solid(1.5, model=weak, size=RADIUS / 5)
+    try:
+        # 16 MPa exceeds 3 Sh - SH = 15 MPa: the wall is in tension
+        solid.equilibrate(Loads(cavity={"wellbore_wall": 16 * MPa}), max_iterations=30)
+    except RuntimeError as err:
+        assert "did not settle in 30 iterations" in str(err)
+    counts = solid.broken_counts()
+    assert counts["tensile"] + counts["shear"] > 0
+    assert np.all(np.isfinite(solid.u.x.array))
+    assert 0.0 < solid.fracture_degree() <= 1.0
+
+
+def test_extreme_stress_ratio_is_solved_or_diagnosed():
+    # 100:1 in-situ ratio: the wall is in tension before any pressure
+    model = InterfaceModel(tensile_strength=3 * MPa, cohesion=17 * MPa, break_rule="all")
+    solid = borehole_solid(100.0, model=model, size=RADIUS / 5)
+    try:
+        solid.equilibrate(Loads(cavity={"wellbore_wall": 0.0}), max_iterations=50)
+    except RuntimeError as err:
+        assert "did not settle" in str(err)
+    else:
+        assert solid.fracture_degree() > 0.0
+    assert np.all(np.isfinite(solid.u.x.array))
+
+
+def test_weibull_strengths_are_reproducible_and_rank_independent():
+    model = InterfaceModel(
+        tensile_strength=3 * MPa, cohesion=17 * MPa, weibull_modulus=3.0, seed=11
+    )
+    world = borehole_solid(1.3, model=model)
+    alone = borehole_solid(1.3, comm=MPI.COMM_SELF, model=model)
+    pick = lambda s: dict(zip(map(tuple, np.round(s.midpoints, 9)), s.t0, strict=True))  # noqa: E731
+    mine = pick(world)
+    ref = pick(alone)
+    assert all(math.isclose(v, ref[k]) for k, v in mine.items())
+    other = borehole_solid(
+        1.3,
+        comm=MPI.COMM_SELF,
+        model=InterfaceModel(
+            tensile_strength=3 * MPa, cohesion=17 * MPa, weibull_modulus=3.0, seed=12
+        ),
+    )
+    assert not np.allclose(other.t0, alone.t0)
+
+
+def test_bad_solver_settings_are_named():
+    tmesh = create_crack_plate(CrackPlate(A, 5 * A, A / 4, A))
+    with pytest.raises(ValueError, match="degree"):
+        CDEMSolid(tmesh, STEEL, InSituStress(0, 0), InterfaceModel(), degree=3)
+    with pytest.raises(ValueError, match="solver"):
+        CDEMSolid(tmesh, STEEL, InSituStress(0, 0), InterfaceModel(), solver="magic")
+    with pytest.raises(KeyError, match="not a cell group"):
+        CDEMSolid(tmesh, STEEL, InSituStress(0, 0), InterfaceModel(), zone="nowhere")
