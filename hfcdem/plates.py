@@ -1,0 +1,211 @@
+"""Gmsh models of 2D plates (plane strain, x-y plane) for the verification scenes.
+
+* :class:`~hfcdem.scene.CrackPlate`: a plate with a central pre-existing crack
+  along x (seed cdem-perforation-breakdown Table 1: 1 m square, 0.2 m crack).
+  The crack is an internal line of the mesh: the triangles on its two sides
+  share its facets (nothing is duplicated); the CDEM solid treats them as a
+  pre-existing crack through interior-facet integrals ``dS(crack)``.
+* :class:`~hfcdem.scene.KGDStrip`: a plate with an initial crack (``crack``)
+  and, beyond it, the line the fracture is expected to follow
+  (``fracture_path``), both internal lines; the injection point, the origin,
+  is a mesh vertex.
+* :class:`~hfcdem.scene.BoreholeSquare`: a square with a borehole at its
+  centre (seed pfc2d sec. 3.2: 1000 mm square, 60 mm borehole).
+
+Tag names (the API):
+
+=================  =====  ==============================================
+name               dim    what
+=================  =====  ==============================================
+rock               cells  rock outside the fracturable zone (all if none)
+fracturable        cells  rock inside the fracturable zone, if given
+crack              facet  pre-existing crack (interior facets)
+fracture_path      facet  KGD: expected path beyond the crack (interior)
+wellbore_wall      facet  borehole wall
+outer_xmin ...     facet  plate edges (outer_xmin/xmax/ymin/ymax)
+symmetry_x, _y     facet  mirror lines x = 0, y = 0 (the model keeps >= 0)
+=================  =====  ==============================================
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import gmsh
+import numpy as np
+
+from hfcdem.geometry import element_quality, plane_residual
+from hfcdem.scene import BoreholeSquare, CrackPlate, KGDStrip, SlabZone, SphereZone
+
+Plate2D = CrackPlate | KGDStrip | BoreholeSquare
+Residual = Callable[[np.ndarray], np.ndarray]
+
+
+def kept_rectangle(geom: Plate2D) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper corners (x, y) of the modelled part of the plate."""
+    hi = geom.plate.half[:2].copy()
+    lo = -hi
+    for axis in geom.symmetry:
+        lo["xy".index(axis)] = 0.0
+    return lo, hi
+
+
+def _crack_lines(geom: Plate2D) -> dict[str, list[tuple[float, float]]]:
+    """x-intervals on y = 0 of the crack and fracture-path lines (kept part)."""
+    if isinstance(geom, BoreholeSquare):
+        return {}
+    half = 0.5 * geom.crack.length
+    lo_x = 0.0 if "x" in geom.symmetry else -half
+    # split at the origin so that it is a vertex (the KGD injection point)
+    crack = [(lo_x, 0.0), (0.0, half)] if lo_x < 0.0 else [(0.0, half)]
+    lines = {"crack": crack}
+    if isinstance(geom, KGDStrip):
+        path = 0.5 * (geom.crack.path_length or geom.crack.length)
+        if path > half:
+            lines["fracture_path"] = [(half, path)] + ([] if lo_x == 0.0 else [(-path, -half)])
+    return lines
+
+
+def expected_measures(geom: Plate2D) -> dict[str, Any]:
+    """Analytic area and line lengths of the modelled part of ``geom``."""
+    lo, hi = kept_rectangle(geom)
+    ext = hi - lo
+    lengths: dict[str, float] = {}
+    hole = 0.0
+    share = 0.5 ** len(geom.symmetry)
+    if isinstance(geom, BoreholeSquare):
+        big_r = geom.wellbore.radius
+        hole = np.pi * big_r**2 * share
+        lengths["wellbore_wall"] = 2.0 * np.pi * big_r * share
+    for name, pieces in _crack_lines(geom).items():
+        lengths[name] = float(sum(b - a for a, b in pieces))
+    for i, axis in enumerate("xy"):
+        other = float(ext[1 - i])
+        lengths[f"outer_{axis}max"] = other
+        if axis in geom.symmetry:
+            cut = 0.0
+            if isinstance(geom, BoreholeSquare):
+                cut = geom.wellbore.radius * (1.0 if "xy"[1 - i] in geom.symmetry else 2.0)
+            lengths[f"symmetry_{axis}"] = other - cut
+        else:
+            lengths[f"outer_{axis}min"] = other
+    return {"volume": float(np.prod(ext)) - hole, "cavity": hole, "areas": lengths}
+
+
+def _add_zone(occ: Any, geom: Plate2D) -> tuple[int, int] | None:
+    zone = geom.fracturable
+    if zone is None:
+        return None
+    if isinstance(zone, SphereZone):
+        return (2, occ.addDisk(zone.centre[0], zone.centre[1], 0.0, zone.radius, zone.radius))
+    assert isinstance(zone, SlabZone)
+    big = 2.0 * geom.plate.half[:2] + 1.0
+    corner = -0.5 * big
+    i = "xy".index(zone.axis)
+    corner[i] = zone.offset - 0.5 * zone.thickness
+    size = big.copy()
+    size[i] = zone.thickness
+    return (2, occ.addRectangle(corner[0], corner[1], 0.0, size[0], size[1]))
+
+
+def _curve_candidates(geom: Plate2D) -> list[tuple[str, Residual]]:
+    lo, hi = kept_rectangle(geom)
+    out: list[tuple[str, Residual]] = []
+    for i, axis in enumerate("xy"):
+        out.append((f"outer_{axis}max", plane_residual(i, float(hi[i]))))
+        name = f"symmetry_{axis}" if axis in geom.symmetry else f"outer_{axis}min"
+        out.append((name, plane_residual(i, float(lo[i]))))
+    if isinstance(geom, BoreholeSquare):
+        big_r = geom.wellbore.radius
+        out.append(("wellbore_wall", lambda p: np.abs(np.linalg.norm(p[:, :2], axis=1) - big_r)))
+    for name, pieces in _crack_lines(geom).items():
+
+        def on_line(p: np.ndarray, pieces: list[tuple[float, float]] = pieces) -> np.ndarray:
+            inside = np.zeros(len(p), dtype=bool)
+            for a, b in pieces:
+                inside |= (p[:, 0] >= a - 1e-9) & (p[:, 0] <= b + 1e-9)
+            return np.where(inside, np.abs(p[:, 1]), np.inf)
+
+        out.append((name, on_line))
+    return out
+
+
+def _sample_curve(model: Any, tag: int) -> np.ndarray:
+    lo, hi = model.getParametrizationBounds(1, tag)
+    params = lo[0] + (np.arange(7) + 0.5) / 7 * (hi[0] - lo[0])
+    return np.asarray([model.getValue(1, tag, [u]) for u in params])
+
+
+def build_plate(geom: Plate2D, model: Any) -> dict[str, Any]:
+    """Create the geometry, physical groups and 2D mesh of ``geom`` in the Gmsh ``model``."""
+    gmsh.option.setNumber("General.NumThreads", 1)
+    occ = model.occ
+    lo, hi = kept_rectangle(geom)
+    plate = [(2, occ.addRectangle(lo[0], lo[1], 0.0, *(hi - lo)))]
+    if isinstance(geom, BoreholeSquare):
+        big_r = geom.wellbore.radius
+        plate, _ = occ.cut(plate, [(2, occ.addDisk(0.0, 0.0, 0.0, big_r, big_r))])
+    tools = []
+    for pieces in _crack_lines(geom).values():
+        for a, b in pieces:
+            p0, p1 = occ.addPoint(a, 0.0, 0.0), occ.addPoint(b, 0.0, 0.0)
+            tools.append((1, occ.addLine(p0, p1)))
+    zone = _add_zone(occ, geom)
+    cells = {"rock": [t for _, t in plate]}
+    if tools or zone is not None:
+        _, children = occ.fragment(plate, tools + ([zone] if zone is not None else []))
+        of_plate = {t for c in children[: len(plate)] for d, t in c if d == 2}
+        if zone is not None:
+            of_zone = {t for d, t in children[-1] if d == 2}
+            occ.remove([(2, t) for t in sorted(of_zone - of_plate)], recursive=True)
+            cells = {"rock": sorted(of_plate - of_zone), "fracturable": sorted(of_plate & of_zone)}
+            if not cells["fracturable"]:
+                raise RuntimeError("the fracturable zone does not meet the plate")
+        else:
+            cells = {"rock": sorted(of_plate)}
+    occ.synchronize()
+
+    candidates = _curve_candidates(geom)
+    tol = 1e-6 * float(max(geom.plate.width, geom.plate.height))
+    groups: dict[str, list[int]] = {}
+    for _, curve in model.getEntities(1):
+        pts = _sample_curve(model, curve)
+        worst = [float(np.max(res(pts))) for _, res in candidates]
+        best = int(np.argmin(worst))
+        if worst[best] <= tol:
+            groups.setdefault(candidates[best][0], []).append(curve)
+        elif len(model.getAdjacencies(1, curve)[0]) < 2:
+            raise RuntimeError(f"cannot tell which edge curve {curve} is")
+        # else: a curve between rock and fracturable zone, inside the plate
+
+    for name, tags in cells.items():
+        if tags:
+            model.addPhysicalGroup(2, tags, name=name)
+    for name in sorted(groups):
+        model.addPhysicalGroup(1, sorted(groups[name]), name=name)
+
+    refined = [c for n in ("crack", "fracture_path", "wellbore_wall") for c in groups.get(n, [])]
+    start = geom.wall_size if isinstance(geom, BoreholeSquare) else geom.mesh.size
+    field = model.mesh.field
+    dist = field.add("Distance")
+    field.setNumbers(dist, "CurvesList", refined)
+    span = float(max(hi - lo))
+    field.setNumber(dist, "Sampling", int(np.clip(np.ceil(2.0 * span / start), 50, 2000)))
+    thr = field.add("Threshold")
+    field.setNumber(thr, "InField", dist)
+    field.setNumber(thr, "SizeMin", start)
+    field.setNumber(thr, "SizeMax", geom.mesh.size_far)
+    field.setNumber(thr, "DistMin", 0.0)
+    field.setNumber(thr, "DistMax", max(geom.mesh.growth_distance(start), 1e-9))
+    field.setAsBackgroundMesh(thr)
+    for opt in ("MeshSizeFromPoints", "MeshSizeFromCurvature", "MeshSizeExtendFromBoundary"):
+        gmsh.option.setNumber(f"Mesh.{opt}", 0)
+    # 1D meshing integrates 1/size along curves; the default 1e-9 costs seconds per scene
+    gmsh.option.setNumber("Mesh.LcIntegrationPrecision", 1e-4)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", geom.mesh.size_far)
+    model.mesh.generate(2)
+    return {
+        "quality": element_quality(model, 2),
+        "faces": {name: len(v) for name, v in sorted(groups.items())},
+    }
