@@ -25,8 +25,8 @@ test:
 	@$(CONTAINER) run bash tests/run-suite.sh $(RANKS)
 
 demo:
-	@$(CONTAINER) run mpirun -n $(RANKS) python3 demos/borehole_kirsch.py -o results/borehole_kirsch
-	@echo "results: results/borehole_kirsch/ (summary.json, hoop_stress.png, sigma_xx.png, fields.xdmf for ParaView)"
+	@$(CONTAINER) run mpirun -n $(RANKS) python3 demos/borehole_breakdown.py -o results/borehole_breakdown
+	@echo "results: results/borehole_breakdown/ (summary.json, fracture.png, sigma_yy.png; fields.bp and interfaces.vtu for ParaView)"
 
 # CMD reaches the shell through the environment, unexpanded by make, so quoting
 # and $variables in it survive

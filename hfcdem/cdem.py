@@ -53,6 +53,9 @@ OPEN, STICK, SLIP = 0, 1, 2
 
 ZoneMarker = Callable[[np.ndarray], np.ndarray]
 
+# solver="auto": direct (MUMPS) up to this many unknowns, CG + GAMG beyond
+AUTO_DIRECT_MAX_DOFS = 300_000
+
 
 @dataclass(frozen=True)
 class Loads:
@@ -105,15 +108,15 @@ class CDEMSolid:
         rollers: Mapping[str, int] | None = None,
         fixed: Sequence[str] = (),
         nitsche_penalty: float | None = None,
-        solver: str = "direct",
+        solver: str = "auto",
         strength_points: str = "vertices",
         petsc_options: Mapping[str, object] | None = None,
         prefix: str = "hfcdem_cdem_",
     ) -> None:
         if degree not in (1, 2):
             raise ValueError(f"degree must be 1 or 2 (DG blocks), got {degree!r}")
-        if solver not in ("direct", "iterative"):
-            raise ValueError(f"solver must be 'direct' or 'iterative', got {solver!r}")
+        if solver not in ("direct", "iterative", "auto"):
+            raise ValueError(f"solver must be 'direct', 'iterative' or 'auto', got {solver!r}")
         self.tmesh = tmesh
         self.mesh = mesh = tmesh.mesh
         self.comm: MPI.Comm = mesh.comm
@@ -131,6 +134,10 @@ class CDEMSolid:
         mesh.topology.create_connectivity(tdim - 1, 0)
 
         self.V = dolfinx.fem.functionspace(mesh, ("DG", degree, (gdim,)))
+        if solver == "auto":
+            # MUMPS is robust for any alpha; past this size CG + GAMG wins on 2 cores
+            dofs = self.V.dofmap.index_map.size_global * gdim
+            self.solver_kind = "direct" if dofs <= AUTO_DIRECT_MAX_DOFS else "iterative"
         self.u = dolfinx.fem.Function(self.V, name="displacement")
         self._u_unit = dolfinx.fem.Function(self.V)
         self.sigma0 = in_situ.tensor(gdim)
@@ -157,6 +164,7 @@ class CDEMSolid:
         self.solves = 0
         self.solve_seconds = 0.0
         self.events: list[BreakEvent] = []
+        self.progress: Callable[[str], None] | None = None
         self._cr_cache: dict[tuple[int, ...], tuple[dolfinx.fem.FunctionSpace, np.ndarray]] = {}
         scalar = dolfinx.default_scalar_type
         self._c_kn = dolfinx.fem.Constant(mesh, scalar(self.model.alpha * material.youngs_modulus))
@@ -328,7 +336,8 @@ class CDEMSolid:
             ]
         )
         return np.array(
-            [V.dofmap.cell_dofs(ci)[li] for ci, li in zip(c, local, strict=True)], dtype=np.int32
+            [V.dofmap.cell_dofs(int(ci))[li] for ci, li in zip(c, local, strict=True)],
+            dtype=np.int32,
         )
 
     def _forms(self, loads_a: Loads, loads_b: Loads | None) -> tuple:
@@ -407,15 +416,20 @@ class CDEMSolid:
             }
         else:
             defaults = {"ksp_type": "cg", "pc_type": "gamg", "ksp_rtol": 1e-10, "ksp_max_it": 2000}
+        ours = []
         for key, value in {**defaults, **self.petsc_options}.items():
             if not db.hasName(self.prefix + key):
                 db.setValue(self.prefix + key, value)
+                ours.append(self.prefix + key)
         ksp = PETSc.KSP().create(self.comm)
         ksp.setOptionsPrefix(self.prefix)
         ksp.setOperators(A)
         if self.solver_kind == "iterative":
             A.setNearNullSpace(self._rigid_modes())
         ksp.setFromOptions()
+        # the database is global: leave only what the user put there
+        for name in ours:
+            db.delValue(name)
         return ksp
 
     def _rigid_modes(self) -> PETSc.NullSpace:
@@ -555,8 +569,8 @@ class CDEMSolid:
         The check runs at every strength point of a facet (its vertices, like the
         nodal springs of CDEM, or its midpoint) and keeps the worst.
         """
-        ratio = np.zeros(self.num_facets)
-        mode = np.full(self.num_facets, FacetState.TENSILE, dtype=np.int8)
+        ratio: np.ndarray = np.zeros(self.num_facets)
+        mode: np.ndarray = np.full(self.num_facets, FacetState.TENSILE, dtype=np.int8)
         for pts in self.strength_points:
             snap = self.snapshot(loads, points=pts)
             check = check_failure(
@@ -596,7 +610,15 @@ class CDEMSolid:
         diagnostic when the active set does not settle in ``max_iterations``.
         """
         broken_total = 0
-        for _ in range(max_iterations):
+        t0 = time.perf_counter()
+        for iteration in range(max_iterations):
+            if self.progress is not None and iteration and iteration % 10 == 0:
+                counts = self.broken_counts()
+                self.progress(
+                    f"  iteration {iteration}: {counts['tensile']} tensile, "
+                    f"{counts['shear']} shear, "
+                    f"{self.solves} solves, {time.perf_counter() - t0:.1f} s"
+                )
             self.solve(loads)
             ratio, mode = self.overstress(loads)
             keys = self.midpoints
@@ -623,29 +645,39 @@ class CDEMSolid:
         max_factor: float,
         stop_after_first: bool = True,
         samples: int = 32,
+        max_iterations: int = 200,
     ) -> float | None:
-        """Raise ``base + lam * unit`` until the first interface breaks.
+        """Raise ``base + lam * unit`` from 0 to ``max_factor``, breaking interfaces on the way.
 
         Exploits linearity between events: two solves with one matrix give
         ``u(lam) = u_base + lam u_unit``, and the critical ``lam`` of every intact
-        facet is found by sampling and bisection.  Returns the load factor of the
-        first break (None if nothing breaks up to ``max_factor``).
+        facet is found by sampling and bisection; at each critical level the
+        states are equilibrated (:meth:`equilibrate`).  With ``stop_after_first``
+        the ramp ends at the first break.  Returns the load factor of the first
+        break, or None if nothing breaks up to ``max_factor``.
         """
         lam = 0.0
+        first: float | None = None
         while lam < max_factor:
             self.solve(base, unit)
             crit = self._critical_factor(base, unit, lam, max_factor, samples)
             local_min = float(crit.min()) if crit.size else math.inf
             lam_star = self.comm.allreduce(local_min, op=MPI.MIN)
             if not math.isfinite(lam_star):
-                return None
+                break
+            first = lam_star if first is None else first
             lam = lam_star * (1.0 + 1e-9)
             loads = combine(base, unit, lam)
             self.u.x.array[:] += lam * self._u_unit.x.array
-            self.equilibrate(loads, load_factor=lam)
+            self.equilibrate(loads, max_iterations=max_iterations, load_factor=lam)
+            if self.progress is not None:
+                counts = self.broken_counts()
+                self.progress(
+                    f"  load factor {lam:.6g}: {counts['tensile']} tensile, {counts['shear']} shear"
+                )
             if stop_after_first:
-                return lam_star
-        return None
+                break
+        return first
 
     def _critical_factor(
         self, base: Loads, unit: Loads, lam0: float, lam1: float, samples: int
@@ -690,7 +722,7 @@ class CDEMSolid:
         a, b = lo[todo], hi[todo]
         for _ in range(60):
             mid = 0.5 * (a + b)
-            over = np.zeros(len(mid), dtype=bool)
+            over: np.ndarray = np.zeros(len(mid), dtype=bool)
             if len(mid):
                 r = ratio_sub(ratio, mid, todo, count)
                 over = r >= 1.0

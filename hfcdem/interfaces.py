@@ -106,11 +106,13 @@ def stable_facet_hash(vertex_ids: npt.NDArray[np.int64], seed: int) -> npt.NDArr
     ids = np.sort(np.asarray(vertex_ids, dtype=np.int64), axis=1).astype(np.uint64)
     mask = np.uint64(0xFFFFFFFFFFFFFFFF)
     with np.errstate(over="ignore"):
-        h = np.full(ids.shape[0], np.uint64(seed) * np.uint64(0x9E3779B97F4A7C15) & mask)
+        h: np.ndarray = np.full(
+            ids.shape[0], np.uint64(seed) * np.uint64(0x9E3779B97F4A7C15) & mask
+        )
         for col in range(ids.shape[1]):
             h = h ^ ids[:, col]
             h = h + np.uint64(0x9E3779B97F4A7C15)
-            z = h
+            z: np.ndarray = h
             z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
             z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
             h = z ^ (z >> np.uint64(31))

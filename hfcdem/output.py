@@ -107,3 +107,78 @@ def write_fields(
         for f in functions:
             xdmf.write_function(f)
     return target
+
+
+def write_vtx(
+    path: str | os.PathLike[str], functions: Sequence[dolfinx.fem.Function], t: float = 0.0
+) -> Path:
+    """Write ``functions`` (same element) to an ADIOS2 VTX folder that ParaView opens."""
+    target = Path(path).with_suffix(".bp")
+    writer = dolfinx.io.VTXWriter(
+        functions[0].function_space.mesh.comm, target, list(functions), engine="BP4"
+    )
+    writer.write(t)
+    writer.close()
+    return target
+
+
+def write_interfaces(
+    path: str | os.PathLike[str],
+    points: np.ndarray,
+    cell_data: Mapping[str, np.ndarray],
+    comm: MPI.Comm = MPI.COMM_WORLD,
+) -> Path:
+    """Write interface facets (one segment or triangle per facet) with data as VTU.
+
+    Each rank passes its owned facets: ``points`` (F, nv, 3) vertex coordinates,
+    ``cell_data`` arrays of length F; rank 0 gathers and writes.
+    """
+    import meshio
+
+    target = Path(path).with_suffix(".vtu")
+    parts = comm.gather((points, {k: np.asarray(v) for k, v in cell_data.items()}), root=0)
+    if comm.rank == 0:
+        assert parts is not None
+        pts = np.concatenate([p.reshape(-1, 3) for p, _ in parts]) if parts else np.zeros((0, 3))
+        nv = points.shape[1] if points.ndim == 3 else 2
+        conn = np.arange(len(pts)).reshape(-1, nv)
+        data = {k: [np.concatenate([d[k] for _, d in parts])] for k in cell_data}
+        kind = "line" if nv == 2 else "triangle"
+        tmp = target.with_name(f".{target.name}.tmp.vtu")
+        meshio.write(str(tmp), meshio.Mesh(pts, [(kind, conn)], cell_data=data))
+        os.replace(tmp, target)
+    comm.barrier()
+    return target
+
+
+def write_solid_results(out: Path, solid: Any, loads: Any, t: float = 0.0) -> dict[str, Path]:
+    """Fields (``fields.bp``) and interfaces (``interfaces.vtu``) of a :class:`CDEMSolid`.
+
+    Fields: displacement, sigma_xx, sigma_yy (MPa, tension positive) as DG1.
+    Interfaces: failure state (0 intact, 1 tensile, 2 shear), opening (m),
+    normal and shear traction (MPa) per facet of the fracturable zone and cracks.
+    """
+    from hfcdem.sampling import interpolate_expression
+
+    mesh, gdim = solid.mesh, solid.gdim
+    u1 = interpolate_expression(solid.u, mesh, ("DG", 1, (gdim,)), "displacement")
+    sigma = solid.total_stress()
+    fields = [u1]
+    for name, (i, j) in (("sigma_xx", (0, 0)), ("sigma_yy", (1, 1)), ("sigma_xy", (0, 1))):
+        fields.append(interpolate_expression(sigma[i, j] / 1e6, mesh, ("DG", 1), name))
+    paths = {"fields": write_vtx(out / "fields", fields, t)}
+    snap = solid.snapshot(loads)
+    own = solid.owned
+    paths["interfaces"] = write_interfaces(
+        out / "interfaces",
+        solid.vertex_coords[own],
+        {
+            "state": solid.state[own].astype(np.int32),
+            "pre_existing": solid.is_crack[own].astype(np.int32),
+            "opening": snap.opening[own],
+            "normal_traction_MPa": snap.normal_traction[own] / 1e6,
+            "shear_traction_MPa": snap.shear_traction[own] / 1e6,
+        },
+        solid.comm,
+    )
+    return paths

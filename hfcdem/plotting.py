@@ -179,3 +179,52 @@ def plot_lines(
         fig.savefig(Path(path), dpi=120)
         plt.close(fig)
     comm.barrier()
+
+
+def plot_interface_states(
+    path: str | os.PathLike[str],
+    segments: np.ndarray,
+    states: np.ndarray,
+    title: str,
+    extent: float,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+) -> None:
+    """Draw 2D interfaces coloured by failure state (0 intact, 1 tensile, 2 shear)."""
+    parts = comm.gather((segments[:, :, :2], states), root=0)
+    if comm.rank != 0:
+        comm.barrier()
+        return
+    assert parts is not None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    segs = np.concatenate([p for p, _ in parts])
+    st = np.concatenate([s for _, s in parts])
+    fig, ax = plt.subplots(figsize=(6.5, 6.5))
+    styles = {
+        0: ("0.8", 0.4, "intact"),
+        1: ("tab:red", 2.0, "tensile"),
+        2: ("tab:blue", 2.0, "shear"),
+    }
+    for code, (color, width, label) in styles.items():
+        mask = st == code
+        if np.any(mask):
+            ax.add_collection(
+                LineCollection(
+                    segs[mask], colors=color, linewidths=width, label=f"{label} ({mask.sum()})"
+                )
+            )
+    ax.set_xlim(-extent, extent)
+    ax.set_ylim(-extent, extent)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (along SH) [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title)
+    ax.legend(loc="upper right")
+    fig.tight_layout()
+    fig.savefig(Path(path), dpi=120)
+    plt.close(fig)
+    comm.barrier()

@@ -204,13 +204,17 @@ def solve_linear(
     dolfinx.fem.petsc.set_bc(b, bcs)
 
     db = PETSc.Options()
+    ours = []
     for key, value in {**DIRECT_SOLVER, **(options or {})}.items():
         if not db.hasName(prefix + key):
             db.setValue(prefix + key, value)
+            ours.append(prefix + key)
     ksp = PETSc.KSP().create(A.comm)
     ksp.setOptionsPrefix(prefix)
     ksp.setOperators(A)
     ksp.setFromOptions()
+    for name in ours:  # the database is global: leave only what the user put there
+        db.delValue(name)
     ksp.solve(b, uh.x.petsc_vec)
     uh.x.scatter_forward()
     reason = ksp.getConvergedReason()

@@ -261,3 +261,61 @@ def test_bad_solver_settings_are_named():
         CDEMSolid(tmesh, STEEL, InSituStress(0, 0), InterfaceModel(), solver="magic")
     with pytest.raises(KeyError, match="not a cell group"):
         CDEMSolid(tmesh, STEEL, InSituStress(0, 0), InterfaceModel(), zone="nowhere")
+
+
+def test_iterative_solver_matches_direct():
+    plate = CrackPlate(A, 50 * A, A / 10, 10 * A)
+    results = []
+    for kind in ("direct", "iterative"):
+        solid = CDEMSolid(
+            create_crack_plate(plate),
+            STEEL,
+            InSituStress(0, 0),
+            InterfaceModel(),
+            zone=lambda x: np.abs(x[1]) < A,
+            degree=2,
+            rollers={"symmetry_x": 0},
+            fixed=["outer"],
+            solver=kind,
+        )
+        solid.solve(Loads(crack_pressure=P))
+        results.append(crack_opening(solid, [[1e-9, 0.0]])[0])
+    assert results[1] == pytest.approx(results[0], rel=1e-6)
+
+
+def test_sliver_elements_solve_finite_or_stop_clearly():
+    import dolfinx
+
+    from hfcdem.meshing import TaggedMesh
+
+    comm = MPI.COMM_WORLD
+    mesh = dolfinx.mesh.create_unit_square(
+        comm, 6, 6, ghost_mode=dolfinx.mesh.GhostMode.shared_facet
+    )
+    # squash a column of vertices almost onto its neighbours: aspect ratios ~1e5
+    x = mesh.geometry.x
+    x[np.isclose(x[:, 0], 0.5), 0] = 1.0 / 3.0 + 1e-6
+    tdim = mesh.topology.dim
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    left = dolfinx.mesh.locate_entities_boundary(mesh, 1, lambda p: np.isclose(p[0], 0.0))
+    right = dolfinx.mesh.locate_entities_boundary(mesh, 1, lambda p: np.isclose(p[0], 1.0))
+    facets = np.concatenate([left, right]).astype(np.int32)
+    values = np.concatenate([np.full(len(left), 1), np.full(len(right), 2)]).astype(np.int32)
+    order = np.argsort(facets)
+    ftags = dolfinx.mesh.meshtags(mesh, 1, facets[order], values[order])
+    cells = np.arange(mesh.topology.index_map(2).size_local, dtype=np.int32)
+    ctags = dolfinx.mesh.meshtags(mesh, 2, cells, np.ones_like(cells))
+    tmesh = TaggedMesh(mesh, ctags, ftags, {"rock": 1}, {"left": 1, "right": 2})
+    solid = CDEMSolid(
+        tmesh,
+        ROCK,
+        InSituStress(0, 0),
+        InterfaceModel(tensile_strength=1 * MPa),
+        degree=1,
+        fixed=["right"],
+    )
+    try:
+        solid.equilibrate(Loads(cavity={"left": 5 * MPa}), max_iterations=20)
+    except (RuntimeError, FloatingPointError) as err:
+        assert "did not" in str(err) or "non-finite" in str(err)
+    assert np.all(np.isfinite(solid.u.x.array))
