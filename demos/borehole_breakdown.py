@@ -11,8 +11,8 @@ cracks, the Hubbert-Willis assumption).  Between
 breaks the response is linear, so each next breaking pressure is found exactly
 rather than by small load steps.  The first break is compared with the
 Hubbert-Willis breakdown pressure 3 Sh - SH + T and must start along SH in
-tension; the cracks then grow stably along SH as the pressure rises to 5 %
-above Hubbert-Willis.  Run with::
+tension; the cracks then grow stably as the pressure rises to 5 % above
+Hubbert-Willis (``--overpressure``).  Run with::
 
     python3 demos/borehole_breakdown.py -o results/borehole_breakdown
     mpirun -n 2 python3 demos/borehole_breakdown.py -o results/borehole_breakdown
@@ -54,6 +54,9 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--cohesion", type=float, default=17.0, help="c0 [MPa]")
     parser.add_argument("--friction-angle", type=float, default=40.0, help="phi [deg]")
     parser.add_argument("--alpha", type=float, default=100.0, help="kn = alpha E / h")
+    parser.add_argument(
+        "--overpressure", type=float, default=0.05, help="ramp to (1 + this) x Hubbert-Willis"
+    )
     parser.add_argument("--no-pictures", action="store_true")
     args = parser.parse_args(argv)
     comm = MPI.COMM_WORLD
@@ -101,10 +104,10 @@ def main(argv: list[str] | None = None) -> dict:
     base = Loads(cavity={"wellbore_wall": 0.0})
     unit = Loads(cavity={"wellbore_wall": 1.0}, in_situ_factor=0.0)
     hw = analytic.hubbert_willis_breakdown(stress.sh_max, stress.sh_min, springs.tensile_strength)
-    breakdown = solid.ramp(base, unit, max_factor=1.05 * hw, stop_after_first=False)
+    final = (1.0 + args.overpressure) * hw
+    breakdown = solid.ramp(base, unit, max_factor=final, stop_after_first=False)
     if breakdown is None:
-        raise SystemExit(f"no interface broke up to {1.05 * hw / MPa:.1f} MPa: check the inputs")
-    final = 1.05 * hw
+        raise SystemExit(f"no interface broke up to {final / MPa:.1f} MPa: check the inputs")
     first = solid.events[0]
     mids = np.concatenate(comm.allgather(first.midpoints))
     modes = np.concatenate(comm.allgather(first.modes))

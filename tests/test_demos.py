@@ -27,3 +27,19 @@ def test_borehole_kirsch_demo_writes_its_results(shared_tmp_path):
     assert on_disk["cells"] == summary["cells"]
     for name in ("fields.xdmf", "fields.h5", "hoop_stress.csv", "hoop_stress.png", "sigma_xx.png"):
         assert (out / name).stat().st_size > 0, name
+
+
+def test_borehole_breakdown_demo_breaks_along_sh_near_hubbert_willis(shared_tmp_path):
+    out = shared_tmp_path / "breakdown"
+    summary = load("borehole_breakdown").main(
+        ["-o", str(out), "--size", "0.0035", "--overpressure", "0.0"]
+    )
+    assert summary["breakdown_pressure_MPa"] == pytest.approx(
+        summary["hubbert_willis_MPa"], rel=0.10
+    )
+    assert summary["first_crack_angle_from_SH_deg"] < 5.0
+    assert summary["first_crack_mode"] == "tensile"
+    assert 0.0 < summary["fracture_degree"] < 1.0
+    for name in ("summary.json", "fracture.png", "sigma_yy.png", "interfaces.vtu"):
+        assert (out / name).stat().st_size > 0, name
+    assert (out / "fields.bp").is_dir()
