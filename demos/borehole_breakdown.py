@@ -1,6 +1,6 @@
 """Breakdown of a pressurised borehole: the CDEM solid from intact rock to fracture.
 
-A 2D plane-strain section through a 70 mm wellbore in the field-cluster rock of
+A 2D plane-strain section through a wellbore of 70 mm radius in the field-cluster rock of
 the perforation paper (Table 4: E 21.5 GPa, T0 3 MPa, SH 38 MPa, Sh 34 MPa).
 Every element face within six radii of the wall is an interface with normal
 and tangential springs (kn = alpha E / h) that breaks in tension (T0) or shear
@@ -46,8 +46,8 @@ MPa = 1e6
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("-o", "--output", default="results/borehole_breakdown")
-    parser.add_argument("--radius", type=float, default=0.035, help="wellbore radius [m]")
-    parser.add_argument("--size", type=float, default=0.00175, help="element size at the wall [m]")
+    parser.add_argument("--radius", type=float, default=0.07, help="wellbore radius [m]")
+    parser.add_argument("--size", type=float, default=0.0035, help="element size at the wall [m]")
     parser.add_argument("--sh-max", type=float, default=38.0, help="SH [MPa]")
     parser.add_argument("--sh-min", type=float, default=34.0, help="Sh [MPa]")
     parser.add_argument("--tensile-strength", type=float, default=3.0, help="T0 [MPa]")

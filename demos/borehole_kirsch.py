@@ -42,8 +42,8 @@ MPa = 1e6
 def main(argv: list[str] | None = None) -> dict:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("-o", "--output", default="results/borehole_kirsch")
-    parser.add_argument("--radius", type=float, default=0.035, help="borehole radius [m]")
-    parser.add_argument("--size", type=float, default=0.00175, help="element size at the wall [m]")
+    parser.add_argument("--radius", type=float, default=0.07, help="borehole radius [m]")
+    parser.add_argument("--size", type=float, default=0.0035, help="element size at the wall [m]")
     parser.add_argument("--sh-max", type=float, default=38.0, help="SH [MPa]")
     parser.add_argument("--sh-min", type=float, default=34.0, help="Sh [MPa]")
     parser.add_argument("--pressure", type=float, default=20.0, help="wellbore pressure [MPa]")
@@ -60,7 +60,7 @@ def main(argv: list[str] | None = None) -> dict:
     out = prepare_output_dir(args.output, comm)
 
     # The field-cluster rock of the perforation paper (E 21.5 GPa, nu 0.25) and
-    # its 70 mm wellbore.  The plate reaches 40 radii, where the Kirsch
+    # its wellbore of 70 mm radius.  The plate reaches 40 radii, where the Kirsch
     # perturbation has decayed to below 0.1 % of the stresses.
     material = ElasticMaterial(youngs_modulus=21.5e9, poisson_ratio=0.25)
     in_situ = InSituStress(sh_max=args.sh_max * MPa, sh_min=args.sh_min * MPa)

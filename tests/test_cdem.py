@@ -319,3 +319,24 @@ def test_sliver_elements_solve_finite_or_stop_clearly():
     except (RuntimeError, FloatingPointError) as err:
         assert "did not" in str(err) or "non-finite" in str(err)
     assert np.all(np.isfinite(solid.u.x.array))
+
+
+def test_per_facet_crack_pressure_matches_uniform_pressure():
+    uniform = sneddon_solid(A / 10)
+    w_uniform = crack_opening(uniform, [[1e-9, 0.0]])[0]
+    per_facet = CDEMSolid(
+        uniform.tmesh,
+        STEEL,
+        InSituStress(0, 0),
+        InterfaceModel(),
+        zone=no_zone,
+        degree=2,
+        rollers={"symmetry_x": 0},
+        fixed=["outer"],
+    )
+    per_facet.solve(Loads(crack_pressure=np.full(per_facet.num_facets, P)))
+    # midpoint quadrature of a per-facet value: same load, so the same opening to O(h^2)
+    assert crack_opening(per_facet, [[1e-9, 0.0]])[0] == pytest.approx(w_uniform, rel=2e-2)
+    # and it is linear in the pressure
+    per_facet.solve(Loads(crack_pressure=np.full(per_facet.num_facets, 2 * P)))
+    assert crack_opening(per_facet, [[1e-9, 0.0]])[0] == pytest.approx(2 * w_uniform, rel=2e-2)

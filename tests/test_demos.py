@@ -18,7 +18,7 @@ def load(name):
 
 def test_borehole_kirsch_demo_writes_its_results(shared_tmp_path):
     out = shared_tmp_path / "kirsch"
-    summary = load("borehole_kirsch").main(["-o", str(out), "--size", "0.007"])
+    summary = load("borehole_kirsch").main(["-o", str(out), "--size", "0.014"])
     assert summary["max_relative_error"] < 0.05
     assert summary["hoop_stress_theta0_MPa"] == pytest.approx(
         summary["kirsch_theta0_MPa"], rel=0.05
@@ -32,7 +32,7 @@ def test_borehole_kirsch_demo_writes_its_results(shared_tmp_path):
 def test_borehole_breakdown_demo_breaks_along_sh_near_hubbert_willis(shared_tmp_path):
     out = shared_tmp_path / "breakdown"
     summary = load("borehole_breakdown").main(
-        ["-o", str(out), "--size", "0.0035", "--overpressure", "0.0"]
+        ["-o", str(out), "--size", "0.007", "--overpressure", "0.0"]
     )
     assert summary["breakdown_pressure_MPa"] == pytest.approx(
         summary["hubbert_willis_MPa"], rel=0.10
