@@ -171,6 +171,7 @@ class CDEMSolid:
         self._c_ratio = dolfinx.fem.Constant(
             mesh, scalar(self.model.shear_stiffness_ratio(material.poisson_ratio))
         )
+        self._c_residual = dolfinx.fem.Constant(mesh, scalar(self.model.residual_stiffness))
         lam2mu = material.lame_lambda + 2.0 * material.shear_modulus
         self._c_glue = dolfinx.fem.Constant(mesh, scalar(self._nitsche * lam2mu))
 
@@ -358,6 +359,9 @@ class CDEMSolid:
         a = ufl.inner(stress(u, self.material), strain(v)) * ufl.dx
         a += ufl.inner(K * ju, jv) * dS(_SPRING)
         a += ufl.inner(kn * Pn * ju, jv) * dS(_SLIP)
+        # a residual spring on open and sliding faces keeps detached blocks attached
+        a += self._c_residual * ufl.inner(K * ju, jv) * dS(_OPEN)
+        a += self._c_residual * ks * ufl.inner((eye - Pn) * ju, jv) * dS(_SLIP)
         # Nitsche glue outside the zone (symmetric interior penalty)
         a += (
             -ufl.inner(ufl.avg(stress(u, self.material)) * npl, jv)
@@ -471,9 +475,14 @@ class CDEMSolid:
             reason = ksp.getConvergedReason()
             b.destroy()
             if reason < 0:
+                hint = (
+                    "the factorisation failed: a block may be detached (raise "
+                    "InterfaceModel.residual_stiffness) or held by no boundary condition"
+                    if reason == PETSc.KSP.ConvergedReason.DIVERGED_PC_FAILED
+                    else "for ill-conditioned springs (very large alpha) use the direct solver"
+                )
                 raise RuntimeError(
-                    f"CDEM solve ({self.prefix}) did not converge: PETSc reason {reason}; "
-                    "for ill-conditioned springs (very large alpha) use the direct solver"
+                    f"CDEM solve ({self.prefix}) did not converge: PETSc reason {reason}; {hint}"
                 )
             if not np.all(np.isfinite(target.x.array)):
                 raise FloatingPointError(

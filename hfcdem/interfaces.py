@@ -49,6 +49,10 @@ class InterfaceModel:
     - ``break_rule``: ``"all"`` breaks every overstressed interface at once,
       ``"most_overstressed"`` only the worst one and then re-solves,
       ``"cap"`` the ``max_breaks`` worst ones.
+    - ``residual_stiffness``: open faces keep this fraction of kn and ks, so a
+      block whose every face has broken stays attached (numerically) instead of
+      making the system singular.  Its relative effect on an opening is about
+      ``residual_stiffness * alpha * 4 a / h`` (crack length a): 1e-10 is negligible.
     """
 
     alpha: float = 100.0
@@ -60,6 +64,7 @@ class InterfaceModel:
     seed: int = 0
     break_rule: str = "most_overstressed"
     max_breaks: int = 1
+    residual_stiffness: float = 1e-10
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.alpha) and 0.0 < self.alpha <= 1e12):
@@ -84,6 +89,11 @@ class InterfaceModel:
             raise ValueError(f"break_rule must be one of {BREAK_RULES}, got {self.break_rule!r}")
         if self.max_breaks < 1:
             raise ValueError(f"max_breaks must be >= 1, got {self.max_breaks!r}")
+        if not (math.isfinite(self.residual_stiffness) and 0.0 <= self.residual_stiffness < 1.0):
+            raise ValueError(
+                "residual_stiffness must be in [0, 1) (fraction of kn), "
+                f"got {self.residual_stiffness!r}"
+            )
 
     @property
     def friction(self) -> float:

@@ -72,6 +72,7 @@ def test_weibull_scatter_keeps_the_mean_and_narrows_with_modulus():
         ({"weibull_modulus": 0.0}, "weibull_modulus"),
         ({"break_rule": "some"}, "break_rule"),
         ({"max_breaks": 0}, "max_breaks"),
+        ({"residual_stiffness": 1.0}, "residual_stiffness"),
     ],
 )
 def test_interface_model_validation_names_the_field(kwargs, field):
