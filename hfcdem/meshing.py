@@ -143,10 +143,7 @@ class BoreholePlate:
     growth: float = 0.25
 
     def __post_init__(self) -> None:
-        for key in ("radius", "half_width", "size_at_wall", "size_far"):
-            value = getattr(self, key)
-            if not np.isfinite(value) or value <= 0.0:
-                raise ValueError(f"{key} must be a positive length in m, got {value!r}")
+        _check_lengths(self, "radius", "half_width", "size_at_wall", "size_far")
         if self.half_width <= 2.0 * self.radius:
             raise ValueError(
                 f"half_width ({self.half_width} m) must exceed twice the radius ({self.radius} m)"
@@ -219,8 +216,7 @@ class BoreholePlate:
             else:
                 key = "outer"
             groups.setdefault(key, []).append(curve)
-        for key, curves in sorted(groups.items()):
-            model.addPhysicalGroup(1, curves, name=key)
+        _add_groups(model, 1, groups)
 
         if self.ring_layers:
             # structured layers: arcs divided evenly, radial lines into ring_layers
@@ -248,6 +244,20 @@ class BoreholePlate:
 def create_borehole_plate(plate: BoreholePlate, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
     """Mesh ``plate`` on rank 0 and distribute it over ``comm``."""
     return mesh_from_gmsh(plate.build, comm, gdim=2, name="borehole_plate")
+
+
+def _add_groups(model: Any, dim: int, groups: Mapping[str, list[int]]) -> None:
+    """Create one named physical group per entry (the names become the tags)."""
+    for key, tags in sorted(groups.items()):
+        model.addPhysicalGroup(dim, tags, name=key)
+
+
+def _check_lengths(obj: Any, *keys: str) -> None:
+    """Raise ValueError naming the first field that is not a positive finite length."""
+    for key in keys:
+        value = getattr(obj, key)
+        if not np.isfinite(value) or value <= 0.0:
+            raise ValueError(f"{key} must be a positive length in m, got {value!r}")
 
 
 def _grade_from(
@@ -287,10 +297,7 @@ class CrackPlate:
     growth: float = 0.25
 
     def __post_init__(self) -> None:
-        for key in ("half_length", "half_width", "size_at_crack", "size_far"):
-            value = getattr(self, key)
-            if not np.isfinite(value) or value <= 0.0:
-                raise ValueError(f"{key} must be a positive length in m, got {value!r}")
+        _check_lengths(self, "half_length", "half_width", "size_at_crack", "size_far")
         if self.half_width <= self.half_length:
             raise ValueError("half_width must exceed the crack half_length")
         if self.size_at_crack > self.half_length / 2:
@@ -326,8 +333,7 @@ class CrackPlate:
             else:
                 key = "outer"
             groups.setdefault(key, []).append(curve)
-        for key, curves in sorted(groups.items()):
-            model.addPhysicalGroup(1, curves, name=key)
+        _add_groups(model, 1, groups)
         reach = (self.size_far - self.size_at_crack) / self.growth
         _grade_from(model, 1, groups["crack"], self.size_at_crack, self.size_far, reach)
         model.mesh.generate(2)
@@ -354,10 +360,7 @@ class PennyBlock:
     growth: float = 0.3
 
     def __post_init__(self) -> None:
-        for key in ("radius", "half_width", "size_at_crack", "size_far"):
-            value = getattr(self, key)
-            if not np.isfinite(value) or value <= 0.0:
-                raise ValueError(f"{key} must be a positive length in m, got {value!r}")
+        _check_lengths(self, "radius", "half_width", "size_at_crack", "size_far")
         if self.half_width <= 2.0 * self.radius:
             raise ValueError("half_width must exceed twice the crack radius")
         if self.size_at_crack > self.radius / 2:
@@ -389,8 +392,7 @@ class PennyBlock:
             else:
                 key = "outer"
             groups.setdefault(key, []).append(surf)
-        for key, surfs in sorted(groups.items()):
-            model.addPhysicalGroup(2, surfs, name=key)
+        _add_groups(model, 2, groups)
         reach = (self.size_far - self.size_at_crack) / self.growth
         _grade_from(model, 2, groups["crack"], self.size_at_crack, self.size_far, reach)
         model.mesh.generate(3)
