@@ -81,6 +81,12 @@ def mesh_from_gmsh(
     t0 = time.perf_counter()
     error: str | None = None
     names: tuple[dict[str, int], dict[str, int]] = ({}, {})
+    if comm.rank != 0 and comm.size > 1:
+        # while rank 0 runs Gmsh, wait without spinning: a spinning MPI wait takes
+        # a core from Gmsh when ranks share cores
+        request = comm.Ibarrier()
+        while not request.Test():
+            time.sleep(0.002)
     if comm.rank == 0:
         gmsh.initialize(interruptible=False)
         gmsh.option.setNumber("General.Terminal", 0)
@@ -96,6 +102,8 @@ def mesh_from_gmsh(
         except Exception as exc:
             error = f"meshing scene {name!r} failed: {type(exc).__name__}: {exc}"
             gmsh.finalize()
+        if comm.size > 1:
+            comm.Ibarrier().Wait()  # wakes the ranks sleeping above
     error = comm.bcast(error, root=0)
     if error is not None:
         raise MeshingError(error)

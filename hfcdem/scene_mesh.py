@@ -56,25 +56,15 @@ def create_scene_mesh(
 
     def build(model: Any) -> None:
         t0 = time.perf_counter()
-        try:
-            if isinstance(geom, PerforatedBlock):
-                facts.update(geometry.build_perforated_block(geom, model))
-            else:
-                facts.update(plates.build_plate(geom, model))
-            facts["gmsh_seconds"] = time.perf_counter() - t0
-            if target is not None:
-                gmsh.option.setNumber("Mesh.Binary", 1)
-                gmsh.write(str(target))
-        finally:
-            if comm.size > 1:
-                comm.Ibarrier().Wait()  # wakes the ranks sleeping below
+        if isinstance(geom, PerforatedBlock):
+            facts.update(geometry.build_perforated_block(geom, model))
+        else:
+            facts.update(plates.build_plate(geom, model))
+        facts["gmsh_seconds"] = time.perf_counter() - t0
+        if target is not None:
+            gmsh.option.setNumber("Mesh.Binary", 1)
+            gmsh.write(str(target))
 
-    if comm.size > 1 and comm.rank != 0:
-        # while rank 0 runs Gmsh, wait without spinning: a spinning MPI wait takes
-        # a core from Gmsh when ranks share cores
-        request = comm.Ibarrier()
-        while not request.Test():
-            time.sleep(0.002)
     tmesh = mesh_from_gmsh(build, comm, gdim=geom.dim, name=scene.name)
     return SceneMesh(scene, tmesh, comm.bcast(facts, root=0), target)
 
