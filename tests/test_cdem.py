@@ -340,3 +340,42 @@ def test_per_facet_crack_pressure_matches_uniform_pressure():
     # and it is linear in the pressure
     per_facet.solve(Loads(crack_pressure=np.full(per_facet.num_facets, 2 * P)))
     assert crack_opening(per_facet, [[1e-9, 0.0]])[0] == pytest.approx(2 * w_uniform, rel=2e-2)
+
+
+@pytest.mark.parametrize("friction_angle", [20.0, 40.0])
+def test_coulomb_friction_on_a_closed_crack_matches_mode_ii_slip(friction_angle):
+    # A closed, broken interface on y = 0 under in-situ shear tau0 = 10 MPa and
+    # normal stress 20 MPa (SH 30, Sh 10 MPa at 45 deg).  Where tau0 > mu sigma_n it
+    # slips, and the slip is that of a mode-II crack under the stress drop
+    # tau0 - mu sigma_n: 4 (tau0 - mu sigma_n) a / E'.  Otherwise it sticks.
+    from hfcdem.cdem import SLIP, STICK
+
+    a, e, nu = A, 21.5e9, 0.25
+    tmesh = create_crack_plate(CrackPlate(a, 30 * a, a / 20, 6 * a, half_model=False))
+    solid = CDEMSolid(
+        tmesh,
+        ElasticMaterial(e, nu),
+        InSituStress(30 * MPa, 10 * MPa, azimuth_sh=45.0),
+        InterfaceModel(alpha=1e3, friction_angle=friction_angle),
+        zone=no_zone,
+        degree=2,
+        fixed=["outer"],
+    )
+    solid.is_crack[:] = False  # a broken interface governed by contact, not an open crack
+    solid.state[:] = FacetState.SHEAR
+    solid.contact[:] = STICK
+    solid.equilibrate(Loads(), max_iterations=50)
+    top = evaluate_at_points(solid.u, [[1e-9, 1e-10]])[0]
+    bottom = evaluate_at_points(solid.u, [[1e-9, -1e-10]])[0]
+    slip, opening = abs(top[0] - bottom[0]), top[1] - bottom[1]
+    drop = 10 * MPa - math.tan(math.radians(friction_angle)) * 20 * MPa
+    owned = solid.owned
+    sliding = solid.comm.allreduce(int(np.count_nonzero(solid.contact[owned] == SLIP)), op=MPI.SUM)
+    total = solid.comm.allreduce(int(owned.sum()), op=MPI.SUM)
+    assert abs(opening) < 1e-3 * 4 * 10 * MPa * a / e  # stays closed
+    if drop > 0:
+        assert sliding == total
+        assert slip == pytest.approx(4 * drop * a * (1 - nu**2) / e, rel=0.03)
+    else:
+        assert sliding == 0
+        assert slip < 0.01 * 4 * 10 * MPa * a * (1 - nu**2) / e  # spring compliance only
