@@ -705,38 +705,41 @@ class CDEMSolid:
         s0n = np.einsum("ij,fj->fi", self.sigma0, n)
         mu = self.model.friction
 
-        def ratio(lam: np.ndarray) -> np.ndarray:
-            t0 = s0n * (fb + lam * fu)[:, None]
-            t0n = np.einsum("fi,fi->f", t0, n)
+        def ratio(lam: np.ndarray, sel: np.ndarray) -> np.ndarray:
+            """Failure ratio of the facets ``sel``, each at its own factor ``lam``."""
+            ns = n[sel]
+            t0 = s0n[sel] * (fb + lam * fu)[:, None]
+            t0n = np.einsum("fi,fi->f", t0, ns)
             worst = np.zeros(len(lam))
             for jb, ju in zip(jbs, jus, strict=True):
-                jump = jb + lam[:, None] * ju
-                jn = np.einsum("fi,fi->f", jump, n)
-                tn = t0n - kn * jn
-                jt = jump - jn[:, None] * n
-                tau = np.linalg.norm((t0 - t0n[:, None] * n) - ks[:, None] * jt, axis=1)
-                worst = np.maximum(worst, check_failure(tn, tau, t0s, c0s, mu).ratio)
+                jump = jb[sel] + lam[:, None] * ju[sel]
+                jn = np.einsum("fi,fi->f", jump, ns)
+                tn = t0n - kn[sel] * jn
+                jt = jump - jn[:, None] * ns
+                tau = np.linalg.norm((t0 - t0n[:, None] * ns) - ks[sel][:, None] * jt, axis=1)
+                worst = np.maximum(worst, check_failure(tn, tau, t0s[sel], c0s[sel], mu).ratio)
             return worst
 
-        jb = jbs[0]
-        count = len(jb)
+        count = len(n)
         lo = np.full(count, lam0)
         hi = np.full(count, np.inf)
+        # sample: bracket each facet's first failure, looking only at unbracketed ones
         for lam in np.linspace(lam0, lam1, samples + 1)[1:]:
-            open_bracket = ~np.isfinite(hi)
-            failed = open_bracket & (ratio(np.full(count, lam)) >= 1.0)
-            hi[failed] = lam
-            lo[open_bracket & ~failed] = lam
-        todo = np.isfinite(hi)
+            sel = np.flatnonzero(~np.isfinite(hi))
+            if len(sel) == 0:
+                break
+            failed = ratio(np.full(len(sel), lam), sel) >= 1.0
+            hi[sel[failed]] = lam
+            lo[sel[~failed]] = lam
+        # bisect every bracket at once
+        todo = np.flatnonzero(np.isfinite(hi))
         a, b = lo[todo], hi[todo]
-        for _ in range(60):
-            mid = 0.5 * (a + b)
-            over: np.ndarray = np.zeros(len(mid), dtype=bool)
-            if len(mid):
-                r = ratio_sub(ratio, mid, todo, count)
-                over = r >= 1.0
-            b = np.where(over, mid, b)
-            a = np.where(over, a, mid)
+        if len(todo):
+            for _ in range(60):
+                mid = 0.5 * (a + b)
+                over = ratio(mid, todo) >= 1.0
+                b = np.where(over, mid, b)
+                a = np.where(over, a, mid)
         crit = np.full(count, np.inf)
         crit[todo] = b
         return crit
@@ -774,15 +777,6 @@ class CDEMSolid:
     def total_stress(self) -> ufl.core.expr.Expr:
         """Total stress sigma0 + C : eps(u) (tension positive)."""
         return ufl.as_matrix(self.sigma0.tolist()) + stress(self.u, self.material)
-
-
-def ratio_sub(
-    ratio: Callable[[np.ndarray], np.ndarray], lam: np.ndarray, mask: np.ndarray, count: int
-) -> np.ndarray:
-    """Evaluate a per-facet ``ratio`` at per-facet factors for the ``mask``-ed facets only."""
-    full = np.zeros(count)
-    full[mask] = lam
-    return ratio(full)[mask]
 
 
 def combine(base: Loads, unit: Loads, lam: float) -> Loads:
