@@ -196,10 +196,15 @@ class CDEMSolid:
         )
         if zone is None:
             in_zone_cell = np.ones(num_cells, dtype=bool)
+        elif isinstance(zone, str) and zone in self.tmesh.facet_names:
+            # a facet group: springs on exactly those facets (a prescribed fracture path)
+            in_zone_cell = np.zeros(num_cells, dtype=bool)
         elif isinstance(zone, str):
             if zone not in self.tmesh.cell_names:
-                known = ", ".join(sorted(self.tmesh.cell_names))
-                raise KeyError(f"fracturable zone {zone!r} is not a cell group; known: {known}")
+                known = ", ".join(sorted(self.tmesh.cell_names) + sorted(self.tmesh.facet_names))
+                raise KeyError(
+                    f"fracturable zone {zone!r} is not a cell or facet group; known: {known}"
+                )
             in_zone_cell = np.zeros(num_cells, dtype=bool)
             in_zone_cell[self.tmesh.cell_tags.find(self.tmesh.cell_names[zone])] = True
         else:
@@ -209,6 +214,10 @@ class CDEMSolid:
         first = f2c.offsets[interior]
         c0, c1 = cells[first], cells[first + 1]
         zone_facet = in_zone_cell[c0] & in_zone_cell[c1]
+        if isinstance(zone, str) and zone in self.tmesh.facet_names:
+            path_mask = np.zeros(num_local, dtype=bool)
+            path_mask[self.tmesh.facets(zone)] = True
+            zone_facet = path_mask[interior]
 
         keep = zone_facet | crack_mask[interior]
         self.facets = interior[keep]  # local facet indices carrying springs or cracks
@@ -456,43 +465,71 @@ class CDEMSolid:
         self._modes = modes  # PETSc keeps references to the vectors only
         return PETSc.NullSpace().create(vectors=[m.petsc_vec for m in modes], comm=self.comm)
 
-    def solve(self, loads: Loads, unit: Loads | None = None) -> None:
-        """Solve for ``loads`` (and, with the same matrix, for ``unit`` into ``u_unit``)."""
+    def factorize(self) -> tuple[dolfinx.fem.Form, PETSc.KSP]:
+        """Assemble the stiffness of the current interface states; return its form and solver.
+
+        The caller owns the KSP (destroy it when done); :meth:`solve_load` reuses it
+        for any number of right-hand sides.
+        """
         t0 = time.perf_counter()
-        a, rhs = self._forms(loads, unit)
+        a, _ = self._forms(Loads(), None)
         a_form = dolfinx.fem.form(a)
         A = dolfinx.fem.petsc.assemble_matrix(a_form, bcs=self._bcs)
         A.assemble()
         ksp = self._ksp(A)
-        for L, target in zip(rhs, (self.u, self._u_unit), strict=False):
-            L_form = dolfinx.fem.form(L)
-            b = dolfinx.fem.petsc.assemble_vector(L_form)
-            dolfinx.fem.petsc.apply_lifting(b, [a_form], bcs=[self._bcs])
-            b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            dolfinx.fem.petsc.set_bc(b, self._bcs)
-            ksp.solve(b, target.x.petsc_vec)
-            target.x.scatter_forward()
-            reason = ksp.getConvergedReason()
-            b.destroy()
-            if reason < 0:
-                hint = (
-                    "the factorisation failed: a block may be detached (raise "
-                    "InterfaceModel.residual_stiffness) or held by no boundary condition"
-                    if reason == PETSc.KSP.ConvergedReason.DIVERGED_PC_FAILED
-                    else "for ill-conditioned springs (very large alpha) use the direct solver"
-                )
-                raise RuntimeError(
-                    f"CDEM solve ({self.prefix}) did not converge: PETSc reason {reason}; {hint}"
-                )
-            if not np.all(np.isfinite(target.x.array)):
-                raise FloatingPointError(
-                    "CDEM solve produced non-finite displacements: check that every block is "
-                    "held (rollers/fixed faces) and that alpha is not extreme"
-                )
-        ksp.destroy()
-        A.destroy()
-        self.solves += 1
+        A.destroy()  # the KSP keeps its own reference
         self.solve_seconds += time.perf_counter() - t0
+        return a_form, ksp
+
+    def solve_load(
+        self,
+        ksp: PETSc.KSP,
+        a_form: dolfinx.fem.Form,
+        L_form: dolfinx.fem.Form,
+        target: dolfinx.fem.Function,
+    ) -> None:
+        """Solve ``K target = L`` with a factorised ``ksp`` (from :meth:`factorize`)."""
+        t0 = time.perf_counter()
+        b = dolfinx.fem.petsc.assemble_vector(L_form)
+        dolfinx.fem.petsc.apply_lifting(b, [a_form], bcs=[self._bcs])
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        dolfinx.fem.petsc.set_bc(b, self._bcs)
+        ksp.solve(b, target.x.petsc_vec)
+        target.x.scatter_forward()
+        reason = ksp.getConvergedReason()
+        b.destroy()
+        if reason < 0:
+            hint = (
+                "the factorisation failed: a block may be detached (raise "
+                "InterfaceModel.residual_stiffness) or held by no boundary condition"
+                if reason == PETSc.KSP.ConvergedReason.DIVERGED_PC_FAILED
+                else "for ill-conditioned springs (very large alpha) use the direct solver"
+            )
+            raise RuntimeError(
+                f"CDEM solve ({self.prefix}) did not converge: PETSc reason {reason}; {hint}"
+            )
+        if not np.all(np.isfinite(target.x.array)):
+            raise FloatingPointError(
+                "CDEM solve produced non-finite displacements: check that every block is "
+                "held (rollers/fixed faces) and that alpha is not extreme"
+            )
+        self.solve_seconds += time.perf_counter() - t0
+
+    def load_form(self, loads: Loads) -> dolfinx.fem.Form:
+        """Compiled right-hand side of ``loads`` for the current interface states."""
+        v = ufl.TestFunction(self.V)
+        n = ufl.FacetNormal(self.mesh)
+        dS = ufl.Measure("dS", domain=self.mesh, subdomain_data=self._interface_tags())
+        return dolfinx.fem.form(self._rhs(loads, v, n, dS))
+
+    def solve(self, loads: Loads, unit: Loads | None = None) -> None:
+        """Solve for ``loads`` (and, with the same matrix, for ``unit`` into ``u_unit``)."""
+        a_form, ksp = self.factorize()
+        for item, target in zip((loads, unit), (self.u, self._u_unit), strict=True):
+            if item is not None:
+                self.solve_load(ksp, a_form, self.load_form(item), target)
+        ksp.destroy()
+        self.solves += 1
 
     # ------------------------------------------------------------- interfaces
 

@@ -353,6 +353,82 @@ def create_crack_plate(plate: CrackPlate, comm: MPI.Comm = MPI.COMM_WORLD) -> Ta
 
 
 @dataclass(frozen=True)
+class PathPlate:
+    """A 2D half plate ``[0, half_width] x [-half_width, half_width]`` with a fracture path.
+
+    The path runs along y = 0 from the symmetry line x = 0 (``"symmetry_x"``) to
+    ``path_length``, split into facets of exactly ``size_on_path``: the first
+    ``crack_facets`` form the pre-existing ``"crack"``, the rest the ``"path"``
+    group that a fracture may open along (a KGD fracture's plane).  The point
+    (0, 0) is a mesh vertex: the injection point.  The element size grows from
+    the path at ``growth`` per metre up to ``size_far``; the outer edges are
+    ``"outer"``.
+    """
+
+    path_length: float
+    half_width: float
+    size_on_path: float
+    size_far: float
+    crack_facets: int = 1
+    growth: float = 0.3
+
+    def __post_init__(self) -> None:
+        _check_lengths(self, "path_length", "half_width", "size_on_path", "size_far")
+        if self.half_width <= self.path_length:
+            raise ValueError(
+                f"half_width ({self.half_width} m) must exceed path_length ({self.path_length} m)"
+            )
+        segments = self.path_length / self.size_on_path
+        if abs(segments - round(segments)) > 1e-6 * segments or round(segments) < 2:
+            raise ValueError(
+                f"path_length ({self.path_length} m) must be a whole number (>= 2) of "
+                f"size_on_path ({self.size_on_path} m)"
+            )
+        if not 1 <= self.crack_facets < round(segments):
+            raise ValueError(f"crack_facets must be in [1, {round(segments) - 1}]")
+        if self.size_far < self.size_on_path:
+            raise ValueError("size_far must be at least size_on_path")
+        if not 0.01 <= self.growth <= 2.0:
+            raise ValueError(f"growth must be in [0.01, 2] (size per distance), got {self.growth!r}")
+
+    def build(self, model: Any) -> None:
+        """Create the Gmsh geometry, groups and mesh of the plate."""
+        occ = model.occ
+        w, h = self.half_width, self.size_on_path
+        a = self.crack_facets * h
+        plate = occ.addRectangle(0.0, -w, 0.0, w, 2.0 * w)
+        pts = [occ.addPoint(x, 0.0, 0.0) for x in (0.0, a, self.path_length)]
+        lines = [occ.addLine(pts[0], pts[1]), occ.addLine(pts[1], pts[2])]
+        occ.fragment([(2, plate)], [(1, c) for c in lines])
+        occ.synchronize()
+        model.addPhysicalGroup(2, [t for _, t in model.getEntities(2)], name="rock")
+        tol = 1e-7 + 1e-9 * w
+        groups: dict[str, list[int]] = {}
+        path_curves = []
+        for _, curve in model.getEntities(1):
+            bx0, by0, _, bx1, by1, _ = model.getBoundingBox(1, curve)
+            if abs(by0) < tol and abs(by1) < tol and bx1 <= self.path_length + tol:
+                key = "crack" if bx1 <= a + tol else "path"
+                n = round((bx1 - bx0) / h)
+                model.mesh.setTransfiniteCurve(curve, n + 1)
+                path_curves.append(curve)
+            elif abs(bx0) < tol and abs(bx1) < tol:
+                key = "symmetry_x"
+            else:
+                key = "outer"
+            groups.setdefault(key, []).append(curve)
+        _add_groups(model, 1, groups)
+        reach = (self.size_far - h) / self.growth
+        _grade_from(model, 1, path_curves, h, self.size_far, reach)
+        model.mesh.generate(2)
+
+
+def create_path_plate(plate: PathPlate, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
+    """Mesh ``plate`` on rank 0 and distribute it over ``comm``."""
+    return mesh_from_gmsh(plate.build, comm, gdim=2, name="path_plate")
+
+
+@dataclass(frozen=True)
 class PennyBlock:
     """A quarter block ``[0, w] x [0, w] x [-w, w]`` with a penny crack of ``radius`` at z = 0.
 

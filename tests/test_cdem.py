@@ -259,7 +259,7 @@ def test_bad_solver_settings_are_named():
         CDEMSolid(tmesh, STEEL, InSituStress(0, 0), InterfaceModel(), degree=3)
     with pytest.raises(ValueError, match="solver"):
         CDEMSolid(tmesh, STEEL, InSituStress(0, 0), InterfaceModel(), solver="magic")
-    with pytest.raises(KeyError, match="not a cell group"):
+    with pytest.raises(KeyError, match="not a cell or facet group"):
         CDEMSolid(tmesh, STEEL, InSituStress(0, 0), InterfaceModel(), zone="nowhere")
 
 

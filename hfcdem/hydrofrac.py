@@ -1,0 +1,845 @@
+"""Fluid-driven fracturing: the CDEM solid coupled to flow in its fractures and cavity.
+
+Unknowns and equations (implicit Euler, one step ``dt``):
+
+- The solid is linear between interface events, so its response to fluid
+  pressure is condensed: with the stiffness factorised once per event,
+  ``u = u_base + sum_g p_g u_g`` where ``u_g`` answers a unit pressure on the
+  open facets (and walls) of pressure group ``g``.  The void volume of every
+  fracture facet and the cavity volume are then linear in the group pressures:
+  ``V = V0 + H p``, exactly the work-conjugate of the pressure loads.
+- Fluid content is tracked as volume at the reference density,
+  ``M = V (1 + p / Kw)``.  Each wet group satisfies
+  ``M_g(p) - M_g^n - dt (sum of inflows) - injected + leaked = 0``; fluxes follow
+  the cubic law on the :class:`~hfcdem.network.Network`.
+- Filling (``filling="saturation"``, the seed paper's eqs. (14)-(19)): a dry
+  facet is at zero pressure with saturation ``S = M / V``; it gains fluid from
+  wet neighbours through ``ks = S^2 (3 - 2S)`` and turns wet when full.  With
+  ``filling="no_lag"`` every broken facet joined to the cavity is wet at once.
+- ``fidelity="uniform"`` collapses the cavity and every facet joined to it into
+  one pressure group (one solve per event): the cheap setting for
+  storage/toughness-dominated scenes.
+
+The small nonlinear system of group pressures is solved by PETSc SNES (Newton,
+line search, finite-difference Jacobian).  After each converged step the
+interfaces are checked: contacts that switch, or facets that break, change the
+stiffness, so the operator is rebuilt and the step repeated until nothing
+changes.  The step size adapts: cut on divergence, grown when easy.  Every step
+records mass balance: injected = fluid in cavity + fractures + leaked.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import dolfinx
+import dolfinx.fem.petsc
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from hfcdem.cdem import _OPEN, OPEN, CDEMSolid, Loads
+from hfcdem.fluid import CarterLeakOff, Fluid, Injection
+from hfcdem.interfaces import FacetState, select_breaking
+from hfcdem.network import CAVITY, Network, build_network, gather_rows
+
+# a floor on storage and aperture keeps a closed, dry facet's equations regular
+_APERTURE_FLOOR = 1e-9  # m
+
+
+class SimulationStopped(RuntimeError):
+    """The coupled run could not continue; the history so far is kept."""
+
+
+@dataclass(frozen=True)
+class FlowSettings:
+    """How the fluid is modelled and stepped (SI units).
+
+    ``cavity``: facet groups of the cavity walls (wellbore, tunnels); fluid is
+    injected into the cavity.  ``injection_point``: a point (a mesh vertex is
+    chosen) where fluid enters when there is no cavity, e.g. a KGD inlet.
+    ``cavity_volume`` defaults to the volume the walls enclose in the mesh
+    (symmetry planes through the origin); ``extra_volume`` adds storage outside
+    the model (the rest of the wellbore and lines).
+    ``breaks_need_fluid``: an interface may break only next to fluid (a wet
+    fracture facet or the cavity), the pressurisation rule of seed 000.
+    """
+
+    cavity: tuple[str, ...] = ()
+    injection_point: tuple[float, ...] | None = None
+    fidelity: str = "viscous"
+    filling: str = "saturation"
+    cavity_volume: float | None = None
+    extra_volume: float = 0.0
+    initial_pressure: float = 0.0
+    breaks_need_fluid: bool = True
+    leak_off: CarterLeakOff | None = None
+    dt_initial: float = 0.01
+    dt_min: float = 1e-9
+    dt_max: float = math.inf
+    dt_growth: float = 1.5
+    max_state_iterations: int = 100
+    break_tolerance: float = 0.01
+    newton_tolerance: float = 1e-10
+    max_newton_iterations: int = 40
+
+    def __post_init__(self) -> None:
+        if self.fidelity not in ("viscous", "uniform"):
+            raise ValueError(f"fidelity must be 'viscous' or 'uniform', got {self.fidelity!r}")
+        if self.filling not in ("saturation", "no_lag"):
+            raise ValueError(f"filling must be 'saturation' or 'no_lag', got {self.filling!r}")
+        if not self.cavity and self.injection_point is None:
+            raise ValueError("give the cavity wall groups or an injection_point: fluid needs a way in")
+        for name in ("dt_initial", "dt_min", "dt_max"):
+            value = getattr(self, name)
+            if not value > 0.0:
+                raise ValueError(f"{name} must be a positive time in s, got {value!r}")
+        if self.dt_min > self.dt_initial:
+            raise ValueError("dt_min must not exceed dt_initial")
+        if not 1.0 <= self.dt_growth <= 10.0:
+            raise ValueError(f"dt_growth must be in [1, 10], got {self.dt_growth!r}")
+        if self.cavity_volume is not None and not self.cavity_volume >= 0.0:
+            raise ValueError(f"cavity_volume must be >= 0 m^3, got {self.cavity_volume!r}")
+        if not (math.isfinite(self.extra_volume) and self.extra_volume >= 0.0):
+            raise ValueError(f"extra_volume must be >= 0 m^3, got {self.extra_volume!r}")
+        if not math.isfinite(self.initial_pressure):
+            raise ValueError("initial_pressure must be a finite pressure in Pa")
+        if not 0.0 < self.newton_tolerance < 1e-3:
+            raise ValueError("newton_tolerance must be in (0, 1e-3) (relative volume)")
+
+
+@dataclass
+class StepRecord:
+    """One accepted time step (SI units, global values)."""
+
+    time: float
+    dt: float
+    injection_pressure: float
+    injected_volume: float
+    cavity_fluid: float
+    fracture_fluid: float
+    fracture_volume: float
+    leaked_volume: float
+    mass_error: float  # |injected - stored - leaked| / injected
+    wet_facets: int
+    tensile: int
+    shear: int
+    fracture_degree: float
+    newton_iterations: int
+    rebuilds: int
+    wall_time: float
+
+    def as_row(self) -> dict[str, float]:
+        """The record as a flat dict (the columns of history.csv)."""
+        return dict(self.__dict__)
+
+
+def relative_permeability(saturation: np.ndarray) -> np.ndarray:
+    """Seed eq. (14): ks = S^2 (3 - 2S), S clipped to [0, 1]."""
+    s = np.clip(saturation, 0.0, 1.0)
+    return s * s * (3.0 - 2.0 * s)
+
+
+@dataclass
+class _Operator:
+    """The condensed solid for the current interface states."""
+
+    base: dolfinx.fem.Function
+    columns: list[dolfinx.fem.Function]
+    v0: np.ndarray  # (n,) void volume of each facet at zero pressure
+    h: np.ndarray  # (n, m) d void / d group pressure
+    vc0: float
+    hc: np.ndarray  # (m,)
+
+
+@dataclass
+class HydraulicFracture:
+    """Inject into a :class:`CDEMSolid` and follow breakdown and fracture growth."""
+
+    solid: CDEMSolid
+    fluid: Fluid
+    injection: Injection
+    settings: FlowSettings
+    progress: Callable[[str], None] | None = None
+    history: list[StepRecord] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        s, solid = self.settings, self.solid
+        self.comm: MPI.Comm = solid.comm
+        self.gdim = solid.gdim
+        self.t = 0.0
+        self.dt = s.dt_initial
+        self.injected = 0.0
+        self.leaked = 0.0
+        self.rebuilds = 0
+        self.first_break_time: float | None = None
+        self._last_ratio = 0.0  # worst failure ratio of eligible facets, last accepted step
+        self._step_ratio = 0.0
+        self.wall_start = time.perf_counter()
+        for name in s.cavity:
+            solid.tmesh.facet_tag(name)  # clear error for unknown groups
+        self._cavity_vertices = self._find_cavity_vertices()
+        self._cavity_point = self._mean_point(self._cavity_vertices)
+        self.cavity_volume = (
+            s.cavity_volume if s.cavity_volume is not None else self._mesh_cavity_volume()
+        ) + s.extra_volume
+        # fluid state per facet key (survives network rebuilds)
+        self._content: dict[tuple[int, ...], float] = {}
+        self._wet_since: dict[tuple[int, ...], float] = {}
+        self._pressure: dict[tuple[int, ...], float] = {}
+        self.p_cavity = s.initial_pressure
+        self._cav_form = self._cavity_load_form()
+        self._rebuild()
+        self._initialise_fluid()
+
+    # ------------------------------------------------------------ geometry
+
+    def _local_vertex_ids(self, facets: np.ndarray) -> np.ndarray:
+        mesh, tdim = self.solid.mesh, self.solid.mesh.topology.dim
+        if len(facets) == 0:  # entities_to_geometry divides by the count
+            return np.zeros((0, tdim), dtype=np.int64)
+        nodes = dolfinx.mesh.entities_to_geometry(mesh, tdim - 1, facets.astype(np.int32), False)
+        return np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)[nodes]
+
+    def _find_cavity_vertices(self) -> np.ndarray:
+        tm = self.solid.tmesh
+        ids = [self._local_vertex_ids(tm.facets(name)).reshape(-1) for name in self.settings.cavity]
+        local = np.unique(np.concatenate(ids)) if ids else np.zeros(0, dtype=np.int64)
+        if self.settings.injection_point is not None:
+            x = self.solid.mesh.geometry.x
+            pt = np.zeros(3)
+            ip = np.asarray(self.settings.injection_point, dtype=float)
+            pt[: len(ip)] = ip
+            d = np.linalg.norm(x - pt, axis=1)
+            i = int(np.argmin(d)) if len(d) else -1
+            best = (float(d[i]), int(self.solid.mesh.geometry.input_global_indices[i])) if i >= 0 else (math.inf, -1)
+            best = min(self.comm.allgather(best))
+            local = np.append(local, best[1])
+        return np.unique(gather_rows(self.comm, local.astype(np.int64)))
+
+    def _mean_point(self, vertex_ids: np.ndarray) -> np.ndarray:
+        geo = self.solid.mesh.geometry
+        mask = np.isin(np.asarray(geo.input_global_indices), vertex_ids)
+        total = self.comm.allreduce(geo.x[mask].sum(axis=0), op=MPI.SUM)
+        count = self.comm.allreduce(int(mask.sum()), op=MPI.SUM)
+        return total / max(count, 1)
+
+    def _mesh_cavity_volume(self) -> float:
+        """Volume enclosed by the walls: -(1/d) int x.n ds (n out of the rock)."""
+        if not self.settings.cavity:
+            return 0.0
+        mesh = self.solid.mesh
+        x, n = ufl.SpatialCoordinate(mesh), ufl.FacetNormal(mesh)
+        form = sum(
+            -ufl.dot(x, n) / self.gdim * self.solid.tmesh.ds(name) for name in self.settings.cavity
+        )
+        local = dolfinx.fem.assemble_scalar(dolfinx.fem.form(form))
+        return float(self.comm.allreduce(local, op=MPI.SUM))
+
+    def _cavity_load_form(self) -> dolfinx.fem.Form | None:
+        """Unit pressure on the cavity walls: -int n.v ds (also the volume change c.u)."""
+        if not self.settings.cavity:
+            return None
+        v, n = ufl.TestFunction(self.solid.V), ufl.FacetNormal(self.solid.mesh)
+        L = sum(-ufl.dot(n, v) * self.solid.tmesh.ds(name) for name in self.settings.cavity)
+        return dolfinx.fem.form(L)
+
+    # ------------------------------------------------------------- network
+
+    def _fracture_facets(self) -> np.ndarray:
+        solid = self.solid
+        return np.flatnonzero(solid.state != FacetState.INTACT)
+
+    def _rebuild_network(self) -> None:
+        solid = self.solid
+        local = self._fracture_facets()
+        owned = local[solid.owned[local]]
+        keys = np.sort(solid.vertex_ids[owned], axis=1)
+        net, _ = build_network(
+            self.comm,
+            keys,
+            solid.areas[owned],
+            solid.vertex_coords[owned],
+            self._cavity_vertices,
+        )
+        self.net: Network = net
+        index = net.index()
+        self._local_fracture = local
+        all_keys = np.sort(solid.vertex_ids[local], axis=1)
+        self._local_pos = np.array([index[tuple(int(v) for v in k)] for k in all_keys], dtype=np.int64)
+        self._owned_sel = solid.owned[local]
+        # open (fluid-loaded) facets in network order
+        is_open = np.zeros(net.size)
+        contact_open = (solid.contact[local] == OPEN).astype(float)
+        is_open[self._local_pos[self._owned_sel]] = contact_open[self._owned_sel]
+        self.is_open = self.comm.allreduce(is_open, op=MPI.SUM) > 0.5
+        comp = net.components()
+        self.joined = comp == 0
+        n = net.size
+        keys_t = [tuple(int(v) for v in k) for k in net.keys]
+        self._keys_t = keys_t
+        self.content = np.array([self._content.get(k, 0.0) for k in keys_t])
+        self.wet_since = np.array([self._wet_since.get(k, math.inf) for k in keys_t])
+        self.pressure = np.array([self._pressure.get(k, 0.0) for k in keys_t])
+        # pre-existing cracks joined to the cavity start full (seed 000 pre-opens them)
+        at_start = getattr(self, "op", None) is None
+        if self.settings.filling == "no_lag" or self.settings.fidelity == "uniform" or at_start:
+            newly = self.joined & ~np.isfinite(self.wet_since)
+            self.wet_since[newly] = self.t
+            self.pressure[newly] = self.p_cavity
+        self.wet = np.isfinite(self.wet_since)
+        if n == 0:
+            self.wet = np.zeros(0, dtype=bool)
+
+    def _store_state(self) -> None:
+        for i, k in enumerate(self._keys_t):
+            self._content[k] = float(self.content[i])
+            self._wet_since[k] = float(self.wet_since[i])
+            self._pressure[k] = float(self.pressure[i])
+
+    def _groups(self) -> np.ndarray:
+        """Pressure group of each facet: 0 the cavity, -1 dry, else 1.."""
+        group = np.full(self.net.size, -1, dtype=np.int64)
+        if self.settings.fidelity == "uniform":
+            group[self.wet] = 0
+        else:
+            group[self.wet] = 1 + np.arange(int(self.wet.sum()))
+        return group
+
+    # ------------------------------------------------------------ operator
+
+    def _openings(self, u: dolfinx.fem.Function) -> np.ndarray:
+        """Mean normal opening of every network facet (midpoint jump), gathered."""
+        solid = self.solid
+        sel = self._local_fracture[self._owned_sel]
+        if len(sel):
+            mid = solid.midpoints[sel]
+            jump = u.eval(mid, solid.cells[sel, 0]) - u.eval(mid, solid.cells[sel, 1])
+            w = -np.einsum("fi,fi->f", np.asarray(jump).reshape(-1, self.gdim), solid.normals[sel])
+        else:
+            w = np.zeros(0)
+        out = np.zeros(self.net.size)
+        out[self._local_pos[self._owned_sel]] = w
+        return self.comm.allreduce(out, op=MPI.SUM)
+
+    def _rebuild(self) -> None:
+        """Factorise the solid for the current states and condense it onto the groups."""
+        t0 = time.perf_counter()
+        self._rebuild_network()
+        solid = self.solid
+        self.group = self._groups()
+        m = 1 + (int(self.group.max()) if self.group.size and self.group.max() > 0 else 0)
+        self.m = m
+        a_form, ksp = solid.factorize()
+        cavity_names = {name: 0.0 for name in self.settings.cavity}
+        base = dolfinx.fem.Function(solid.V)
+        solid.solve_load(ksp, a_form, solid.load_form(Loads(cavity=cavity_names)), base)
+        # unit pressure per group on its open facets, plus the walls for the cavity group
+        v, nrm = ufl.TestFunction(solid.V), ufl.FacetNormal(solid.mesh)
+        q = dolfinx.fem.Function(dolfinx.fem.functionspace(solid.mesh, ("DG", 0)))
+        # per-facet values through a CR function (exact at the single quadrature point)
+        cr = solid._facet_function(np.zeros(solid.num_facets))
+        dS = ufl.Measure("dS", domain=solid.mesh, subdomain_data=solid._interface_tags())
+        del q
+        L = -cr("+") * ufl.dot(nrm("+"), ufl.jump(v)) * dS(_OPEN, metadata={"quadrature_degree": 1})
+        c_cav = dolfinx.fem.Constant(solid.mesh, dolfinx.default_scalar_type(0.0))
+        if self.settings.cavity:
+            L += sum(
+                -c_cav * ufl.dot(nrm, v) * solid.tmesh.ds(name) for name in self.settings.cavity
+            )
+        L_form = dolfinx.fem.form(L)
+        _, cr_dofs = solid._cr_cache[()]
+        local_group = np.full(solid.num_facets, -2, dtype=np.int64)
+        local_group[self._local_fracture] = self.group[self._local_pos]
+        local_open = np.zeros(solid.num_facets, dtype=bool)
+        local_open[self._local_fracture] = self.is_open[self._local_pos]
+        columns = []
+        for g in range(m):
+            cr.x.array[:] = 0.0
+            cr.x.array[cr_dofs] = ((local_group == g) & local_open).astype(float)
+            cr.x.scatter_forward()
+            c_cav.value = 1.0 if g == 0 else 0.0
+            col = dolfinx.fem.Function(solid.V)
+            solid.solve_load(ksp, a_form, L_form, col)
+            columns.append(col)
+        ksp.destroy()
+        solid.solves += 1
+        area = self.net.area
+        # void volume: the mechanical opening (minus the intact pre-compression offset
+        # of broken facets, as in CDEMSolid.snapshot) plus the residual aperture
+        w0 = self._openings(base) - self._offsets()
+        v0 = np.where(self.is_open, area * w0, 0.0) + area * self.fluid.residual_aperture
+        h = np.zeros((self.net.size, m))
+        hc = np.zeros(m)
+        vc0 = self.cavity_volume
+        cvec = dolfinx.fem.petsc.assemble_vector(self._cav_form) if self._cav_form else None
+        if cvec is not None:
+            cvec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            vc0 += cvec.dot(base.x.petsc_vec)
+        for g, col in enumerate(columns):
+            h[:, g] = np.where(self.is_open, area * self._openings(col), 0.0)
+            if cvec is not None:
+                hc[g] = cvec.dot(col.x.petsc_vec)
+        if cvec is not None:
+            cvec.destroy()
+        self.op = _Operator(base=base, columns=columns, v0=v0, h=h, vc0=vc0, hc=hc)
+        self.rebuilds += 1
+        self.rebuild_seconds = getattr(self, "rebuild_seconds", 0.0) + time.perf_counter() - t0
+
+    def _offsets(self) -> np.ndarray:
+        """Intact pre-compression offset of each broken facet; also stores the in-situ
+        normal stress (compression positive) per facet in ``self.closure_stress``."""
+        solid = self.solid
+        sel = self._local_fracture[self._owned_sel]
+        n = solid.normals[sel]
+        t0n = np.einsum("fi,ij,fj->f", n, solid.sigma0, n)
+        off = np.where((t0n < 0.0) & ~solid.is_crack[sel], -t0n / solid.kn[sel], 0.0)
+        out = np.zeros((self.net.size, 2))
+        out[self._local_pos[self._owned_sel]] = np.column_stack([off, -t0n])
+        out = self.comm.allreduce(out, op=MPI.SUM)
+        self.closure_stress = out[:, 1]
+        return out[:, 0]
+
+    # ---------------------------------------------------------------- flow
+
+    def _facet_pressure(self, p: np.ndarray) -> np.ndarray:
+        """Pressure of every facet (dry facets 0) for group pressures (m,) or (m, k)."""
+        shape = (self.net.size,) + p.shape[1:]
+        pf = np.zeros(shape)
+        wet = self.group >= 0
+        pf[wet] = p[self.group[wet]]
+        return pf
+
+    def _volumes(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return self.op.v0.reshape(-1, *([1] * (p.ndim - 1))) + self.op.h @ p, self.op.vc0 + self.op.hc @ p
+
+    def _fluxes(self, p: np.ndarray, vf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Flux of every connection (from its first to its second end), and saturation."""
+        net, fl = self.net, self.fluid
+        area = net.area.reshape(-1, *([1] * (p.ndim - 1)))
+        aperture = np.maximum(vf / area - fl.residual_aperture, 0.0) + max(
+            fl.residual_aperture, _APERTURE_FLOOR
+        )
+        trans = net.transmissibility(aperture, fl.conductivity)
+        pf = self._facet_pressure(p)
+        pc = p[0]
+        sat = np.ones_like(vf)
+        dry = self.group < 0
+        sat[dry] = np.clip(self.content[dry].reshape(-1, *([1] * (p.ndim - 1))) / np.maximum(vf[dry], 1e-300), 0.0, 1.0)
+        fa = net.entry_facet[net.pair_a]
+        inner = net.pair_b != CAVITY
+        fb = np.where(inner, net.entry_facet[np.where(inner, net.pair_b, 0)], 0)
+        pa = pf[fa]
+        pb = np.where(_col(inner, p), pf[fb], pc)
+        sa = sat[fa]
+        sb = np.where(_col(inner, p), sat[fb], 1.0)
+        kr = relative_permeability(0.5 * (sa + sb))
+        drive = pa - pb + _col(self._gravity_drive(fa, fb, inner), p)
+        return trans * kr * drive, sat
+
+    def _gravity_drive(self, fa: np.ndarray, fb: np.ndarray, inner: np.ndarray) -> np.ndarray:
+        g = self.fluid.gravity
+        if g is None:
+            return np.zeros(len(fa))
+        gv = np.zeros(3)
+        gv[: len(g)] = g
+        xa = self.net.centroid[fa]
+        xb = np.where(inner[:, None], self.net.centroid[fb], self._cavity_point[None, :])
+        return self.fluid.density * (xb - xa) @ gv
+
+    def _residual(
+        self, p: np.ndarray, dt: float, source: float, leak: np.ndarray, control: bool = True
+    ) -> np.ndarray:
+        """Group residuals (volume, m^3) for group pressures (m,) or (m, k)."""
+        kw = self.fluid.bulk_modulus
+        vf, vc = self._volumes(p)
+        flux, _ = self._fluxes(p, vf)
+        pf = self._facet_pressure(p)
+        r = np.zeros(p.shape)
+        wet = self.group >= 0
+        area = self.net.area.reshape(-1, *([1] * (p.ndim - 1)))
+        floor = area * _APERTURE_FLOOR
+        stored = vf + np.maximum(vf, floor) * pf / kw
+        np.add.at(r, self.group[wet], stored[wet] - self.content[wet].reshape(-1, *([1] * (p.ndim - 1))))
+        r[0] += vc + np.maximum(vc, 0.0) * p[0] / kw - self.cavity_content
+        net = self.net
+        fa = net.entry_facet[net.pair_a]
+        inner = net.pair_b != CAVITY
+        fb = np.where(inner, net.entry_facet[np.where(inner, net.pair_b, 0)], 0)
+        ga = self.group[fa]
+        gb = np.where(inner, self.group[fb], 0)
+        ok = ga >= 0
+        np.add.at(r, ga[ok], dt * flux[ok])
+        ok = gb >= 0
+        np.add.at(r, gb[ok], -dt * flux[ok])
+        np.add.at(r, self.group[wet], _col(leak[wet], p))
+        if self.injection.rate_controlled or not control:
+            r[0] -= source
+        else:
+            scale = max(self.cavity_volume / kw + abs(self.op.hc[0]), 1e-30)
+            r[0] = (p[0] - source) * scale
+        return r
+
+    def _newton(self, dt: float, source: float, leak: np.ndarray, guess: np.ndarray) -> tuple[np.ndarray, int, bool]:
+        """Solve the group equations with SNES; returns pressures, iterations, converged."""
+        m = self.m
+        scale = max(
+            self.cavity_content + float(self.content.sum()) + abs(source if self.injection.rate_controlled else 0.0),
+            float(self.net.area.sum()) * _APERTURE_FLOOR,
+            1e-30,
+        )
+        snes = PETSc.SNES().create(PETSc.COMM_SELF)
+        snes.setOptionsPrefix("hfcdem_flow_")
+        x = PETSc.Vec().createSeq(m)
+        f = PETSc.Vec().createSeq(m)
+        jac = PETSc.Mat().createDense((m, m), comm=PETSc.COMM_SELF)
+        jac.setUp()
+
+        def residual(_snes, xv, fv) -> None:
+            fv.array[:] = self._residual(xv.array_r.copy(), dt, source, leak)
+
+        def jacobian(_snes, xv, J, _P) -> None:
+            p = xv.array_r.copy()
+            step = 1e-7 * np.maximum(np.abs(p), 1e3)
+            batch = p[:, None] + np.diag(step)
+            r0 = self._residual(p, dt, source, leak)
+            rb = self._residual(batch, dt, source, leak)
+            J.getDenseArray()[:] = (rb - r0[:, None]) / step[None, :]
+            J.assemble()
+
+        snes.setFunction(residual, f)
+        snes.setJacobian(jacobian, jac)
+        snes.setType("newtonls")
+        snes.getKSP().setType("preonly")
+        snes.getKSP().getPC().setType("lu")
+        snes.setTolerances(
+            rtol=1e-14,
+            atol=self.settings.newton_tolerance * scale,
+            stol=1e-14,
+            max_it=self.settings.max_newton_iterations,
+        )
+        snes.setFromOptions()
+        x.array[:] = guess
+        try:
+            with np.errstate(all="ignore"):
+                snes.solve(None, x)
+            ok = snes.getConvergedReason() > 0
+        except PETSc.Error:  # a singular Jacobian: cut the step
+            ok = False
+        p = x.array_r.copy()
+        its = snes.getIterationNumber()
+        ok = ok and bool(np.all(np.isfinite(p)))
+        for obj in (snes, x, f, jac):
+            obj.destroy()
+        return p, its, ok
+
+    # ------------------------------------------------------------ stepping
+
+    def _initialise_fluid(self) -> None:
+        """Cavity (and no-lag fractures) full at the initial pressure."""
+        p = np.full(self.m, self.settings.initial_pressure)
+        vf, vc = self._volumes(p)
+        kw = self.fluid.bulk_modulus
+        self.cavity_content = float(max(vc, 0.0) * (1.0 + p[0] / kw))
+        wet = self.group >= 0
+        self.content[wet] = vf[wet] * (1.0 + p[0] / kw)
+        self.pressure[wet] = p[0]
+        self.initial_fluid = self.cavity_content + float(self.content.sum())
+        self._store_state()
+
+    def _guess(self, added: float = 0.0) -> np.ndarray:
+        """Last pressures; at the start, the uniform pressure that stores ``added`` more."""
+        if self.history or not self.injection.rate_controlled:
+            guess = np.full(self.m, self.p_cavity)
+            wet = self.group > 0
+            guess[self.group[wet]] = self.pressure[wet]
+            return guess
+        wet = self.group >= 0
+        stiff = float(self.op.h[wet].sum() + self.op.hc.sum())
+        volume = float(self.op.v0[wet].sum()) + self.op.vc0
+        held = self.cavity_content + float(self.content[wet].sum()) + added
+        p = (held - volume) / stiff if stiff > 0 else self.p_cavity
+        return np.full(self.m, max(p, self.p_cavity))
+
+    def _set_displacement(self, p: np.ndarray) -> Loads:
+        u = self.solid.u
+        u.x.array[:] = self.op.base.x.array
+        for g, col in enumerate(self.op.columns):
+            u.x.array[:] += p[g] * col.x.array
+        pf = self._facet_pressure(p)
+        local = np.zeros(self.solid.num_facets)
+        local[self._local_fracture] = pf[self._local_pos]
+        cavity = {name: float(p[0]) for name in self.settings.cavity}
+        return Loads(cavity=cavity, crack_pressure=local)
+
+    def _eligible(self) -> np.ndarray:
+        """Intact facets allowed to break: next to fluid when the settings say so."""
+        solid = self.solid
+        if not self.settings.breaks_need_fluid:
+            return np.ones(solid.num_facets, dtype=bool)
+        # the fluid has arrived where a wet facet's pressure exceeds its closure stress
+        pressure = getattr(self, "_trial_pressure", self.pressure)
+        if len(pressure) != self.net.size:
+            pressure = self.pressure
+        pressurised = self.wet & (pressure > self.closure_stress)
+        wet_ids = (
+            np.unique(self.net.keys[pressurised].reshape(-1))
+            if self.net.size
+            else np.zeros(0, np.int64)
+        )
+        ids = np.union1d(wet_ids, self._cavity_vertices)
+        return np.isin(solid.vertex_ids, ids).any(axis=1)
+
+    def step(self) -> StepRecord:
+        """Advance one accepted time step (cutting the step on failure)."""
+        s = self.settings
+        while True:
+            dt = self.dt
+            record = self._try_step(dt)
+            if isinstance(record, StepRecord):
+                return record
+            if isinstance(record, float):  # land closer to the first break
+                self.dt = record
+                continue
+            self.dt = dt * 0.5
+            if self.dt < s.dt_min:
+                raise SimulationStopped(
+                    f"the coupled step failed down to dt = {dt:.3g} s (dt_min {s.dt_min:g} s) "
+                    f"at t = {self.t:.6g} s: the flow equations did not converge; "
+                    "try a smaller dt_initial, a residual aperture, or fidelity='uniform'"
+                )
+
+    def _try_step(self, dt: float) -> StepRecord | float | None:
+        s, solid = self.settings, self.solid
+        t1 = self.t + dt
+        source = (
+            self.injection.volume_between(self.t, t1)
+            if self.injection.rate_controlled
+            else self.injection.value_at(t1)
+        )
+        changed_states = False
+        its_total = 0
+        contact_iterations = 0
+        for iteration in range(s.max_state_iterations):
+            if self.progress is not None and iteration and iteration % 10 == 0:
+                counts = solid.broken_counts()
+                self.progress(
+                    f"  t {t1:.6g} s, iteration {iteration}: {counts['tensile']} tensile, "
+                    f"{counts['shear']} shear, {int(self.wet.sum())} wet, {self.rebuilds} rebuilds, "
+                    f"last change: {getattr(self, '_last_change', '')}"
+                )
+            leak = self._leak(t1)
+            p, its, ok = self._newton(dt, source, leak, self._guess(source))
+            its_total += its
+            last_its = its
+            if not ok:
+                return None
+            # a wet facet below zero pressure drains (saturation model)
+            if s.filling == "saturation" and s.fidelity == "viscous":
+                pf = self._facet_pressure(p)
+                # (facets that filled during this step may hold suction until it ends)
+                drained = (self.group > 0) & (pf < 0.0) & (self.wet_since < t1)
+                # dry facets that fill during this step join the wet set at once,
+                # so the front is not limited to one facet per step
+                vf, _ = self._volumes(p)
+                gain = self._dry_gain(p, vf, dt)
+                full = (self.group < 0) & (gain > 0.0) & (self.content + gain >= vf)
+                if drained.any() or full.any():
+                    self._last_change = f"{int(drained.sum())} drained, {int(full.sum())} filled"
+                    self.wet_since[drained] = math.inf
+                    self.wet_since[full] = t1
+                    self.wet = np.isfinite(self.wet_since)
+                    self._store_state()
+                    self._rebuild()
+                    changed_states = True
+                    continue
+            loads = self._set_displacement(p)
+            # contact chatter (a facet that keeps opening and closing under the same
+            # pressure) is cut off: after a few switches the step keeps the states
+            saved = (solid.contact.copy(), solid.friction_traction.copy())
+            switched = solid.update_contact(loads)
+            contact_iterations += 1 if switched else 0
+            if switched and contact_iterations > 2:
+                solid.contact[:], solid.friction_traction[:] = saved
+                switched = 0
+            if switched:
+                self._last_change = f"{switched} contacts switched"
+                solid._sync_ghost_states()
+                self._store_state()
+                self._rebuild()
+                continue
+            self._trial_pressure = self._facet_pressure(p)
+            ratio, mode = solid.overstress(loads)
+            ratio = np.where(self._eligible(), ratio, 0.0)
+            worst = float(self.comm.allreduce(float(ratio.max(initial=0.0)), op=MPI.MAX))
+            if iteration == 0:
+                # event location: a step that overshoots the next break by more than
+                # break_tolerance is shortened (ratio interpolated linearly in time)
+                r0 = self._last_ratio
+                if worst > 1.0 + s.break_tolerance and r0 < 1.0 and dt > 4.0 * s.dt_min:
+                    frac = (1.0 - r0) / (worst - r0)
+                    return max(dt * min(max(frac, 0.05), 0.9), s.dt_min)
+                self._step_ratio = worst
+            chosen = select_breaking(
+                ratio, solid.midpoints, solid.model.break_rule, solid.model.max_breaks, self.comm
+            )
+            nbreak = self.comm.allreduce(len(chosen), op=MPI.SUM)
+            if nbreak:
+                self._last_change = f"{nbreak} broke"
+                solid._break(chosen, mode[chosen], t1)
+                if self.first_break_time is None:
+                    self.first_break_time = t1
+                self._store_state()
+                self._rebuild()
+                changed_states = True
+                continue
+            break
+        else:
+            raise SimulationStopped(
+                f"interface states did not settle in {s.max_state_iterations} iterations at "
+                f"t = {t1:.6g} s; use a smaller time step"
+            )
+        self._last_its = last_its
+        return self._accept(p, dt, t1, source, leak, its_total, changed_states)
+
+    def _leak(self, t1: float) -> np.ndarray:
+        lo = self.settings.leak_off
+        if lo is None or self.net.size == 0:
+            return np.zeros(self.net.size)
+        vol = lo.volume(self.net.area, self.wet_since, self.t, t1)
+        return np.where(self.wet, vol, 0.0)
+
+    def _dry_gain(self, p: np.ndarray, vf: np.ndarray, dt: float) -> np.ndarray:
+        """Volume each facet receives over the step from its connections (dry ones keep it)."""
+        net = self.net
+        flux, _ = self._fluxes(p, vf)
+        fa = net.entry_facet[net.pair_a]
+        inner = net.pair_b != CAVITY
+        fb = net.entry_facet[net.pair_b[inner]]
+        gain = np.zeros(net.size)
+        np.add.at(gain, fa, -dt * flux)
+        np.add.at(gain, fb, dt * flux[inner])
+        return gain
+
+    def _accept(
+        self, p: np.ndarray, dt: float, t1: float, source: float, leak: np.ndarray, its: int, changed: bool
+    ) -> StepRecord:
+        kw = self.fluid.bulk_modulus
+        vf, vc = self._volumes(p)
+        flux, _ = self._fluxes(p, vf)
+        pf = self._facet_pressure(p)
+        wet = self.group >= 0
+        net = self.net
+        fa = net.entry_facet[net.pair_a]
+        inner = net.pair_b != CAVITY
+        fb = np.where(inner, net.entry_facet[np.where(inner, net.pair_b, 0)], 0)
+        gain = self._dry_gain(p, vf, dt)
+        floor = net.area * _APERTURE_FLOOR
+        stored = vf + np.maximum(vf, floor) * pf / kw
+        injected_step = source if self.injection.rate_controlled else 0.0
+        if not self.injection.rate_controlled:
+            # the balance of the cavity group gives the volume pumped in this step
+            injected_step = float(self._residual(p, dt, 0.0, leak, control=False)[0])
+        self.content = np.where(wet, stored, self.content + gain)
+        self.cavity_content = float(vc + max(vc, 0.0) * p[0] / kw)
+        self.pressure = np.where(wet, pf, 0.0)
+        self.p_cavity = float(p[0])
+        self.injected += injected_step
+        self.leaked += float(leak.sum())
+        # dry facets that filled up turn wet
+        full = (~wet) & (self.content >= vf * (1.0 - 1e-12))
+        if full.any() and self.settings.fidelity == "viscous":
+            self.wet_since[full] = t1
+            self.wet = np.isfinite(self.wet_since)
+            self.pressure[full] = 0.0
+        self.t = t1
+        self._store_state()
+        if full.any():
+            self._rebuild()
+        stored_total = self.cavity_content + float(self.content.sum()) - self.initial_fluid
+        err = abs(self.injected - stored_total - self.leaked) / max(abs(self.injected), 1e-300)
+        counts = self.solid.broken_counts()
+        rec = StepRecord(
+            time=t1,
+            dt=dt,
+            injection_pressure=self.p_cavity,
+            injected_volume=self.injected,
+            cavity_fluid=self.cavity_content,
+            fracture_fluid=float(self.content.sum()),
+            fracture_volume=float(np.maximum(vf, 0.0).sum()),
+            leaked_volume=self.leaked,
+            mass_error=err,
+            wet_facets=int(self.wet.sum()),
+            tensile=counts["tensile"],
+            shear=counts["shear"],
+            fracture_degree=self.solid.fracture_degree(),
+            newton_iterations=its,
+            rebuilds=self.rebuilds,
+            wall_time=time.perf_counter() - self.wall_start,
+        )
+        if not (math.isfinite(rec.injection_pressure) and np.all(np.isfinite(self.pressure))):
+            raise SimulationStopped(f"non-finite pressure at t = {t1:.6g} s")
+        self.history.append(rec)
+        self._last_ratio = self._step_ratio if not changed else 1.0
+        if not changed and self._last_its <= 6:
+            self.dt = min(dt * self.settings.dt_growth, self.settings.dt_max)
+        return rec
+
+    def run(self, t_end: float, max_steps: int = 100_000) -> list[StepRecord]:
+        """Step to ``t_end`` (s); progress lines go to ``progress`` if set."""
+        if not (math.isfinite(t_end) and t_end > self.t):
+            raise ValueError(f"t_end must be a time in s after the current {self.t} s, got {t_end!r}")
+        for _ in range(max_steps):
+            if self.t >= t_end * (1.0 - 1e-12):
+                break
+            self.dt = min(self.dt, t_end - self.t)
+            rec = self.step()
+            if self.progress is not None:
+                elapsed = rec.wall_time
+                eta = elapsed / rec.time * (t_end - rec.time) if rec.time > 0 else math.nan
+                self.progress(
+                    f"t {rec.time:9.4g} s  p {rec.injection_pressure / 1e6:9.4f} MPa  "
+                    f"broken {rec.tensile + rec.shear:5d}  wet {rec.wet_facets:5d}  "
+                    f"dt {rec.dt:8.3g} s  wall {elapsed:7.1f} s  eta {eta:7.1f} s"
+                )
+        return self.history
+
+    # ------------------------------------------------------------- results
+
+    def wet_extent(self, origin: Sequence[float], direction: Sequence[float]) -> float:
+        """Fluid front along ``direction`` from ``origin``: wet facets plus the filled share of the next."""
+        o = np.zeros(3)
+        o[: len(origin)] = origin
+        d = np.zeros(3)
+        d[: len(direction)] = direction
+        d /= np.linalg.norm(d)
+        if not self.wet.any():
+            return 0.0
+        proj = (self.net.centroid - o) @ d
+        half = 0.5 * self.net.area  # 2D: facet length
+        reach = float(np.max(proj[self.wet] + half[self.wet]))
+        dry = ~self.wet
+        if dry.any():
+            vf, _ = self._volumes(self._guess())
+            sat = np.clip(self.content / np.maximum(vf, 1e-300), 0.0, 1.0)
+            ahead = dry & (np.abs(proj - half - reach) < 1e-6 * max(reach, 1.0))
+            if ahead.any():
+                reach += float(np.max(sat[ahead] * 2 * half[ahead]))
+        return reach
+
+    def opening_at_cavity(self) -> float:
+        """Mean opening of the facets that touch the cavity or injection point (m)."""
+        touch = self.net.touches_cavity
+        if not touch.any():
+            return 0.0
+        vf, _ = self._volumes(self._guess())
+        return float(np.sum(vf[touch]) / np.sum(self.net.area[touch]))
+
+
+def _col(values: np.ndarray, like: np.ndarray) -> np.ndarray:
+    """Broadcast a per-item array against a (m,) or (m, k) pressure array."""
+    return values.reshape(values.shape + (1,) * (like.ndim - 1))
