@@ -1,0 +1,258 @@
+"""Fluid-driven fracturing verified: KGD (viscosity and toughness), borehole breakdown,
+mass balance, rank independence, and stability at the extremes."""
+
+from __future__ import annotations
+
+import math
+from functools import cache
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from hfcdem.analytic import kgd_viscosity
+from hfcdem.breakdown import detect_breakdown
+from hfcdem.cdem import CDEMSolid
+from hfcdem.fluid import CarterLeakOff, Fluid, Injection
+from hfcdem.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
+from hfcdem.interfaces import InterfaceModel
+from hfcdem.meshing import BoreholePlate, PathPlate, create_borehole_plate, create_path_plate
+from hfcdem.solid import ElasticMaterial, InSituStress
+
+# seed 000 section 4.2: E 25 GPa, nu 0.25, water, Q0 = 4 kg/s per metre (half model: 2)
+ROCK = ElasticMaterial(25e9, 0.25)
+Q0 = 4e-3
+
+
+@cache
+def _path_mesh(dx: float, comm_name: str = "world"):
+    comm = MPI.COMM_WORLD if comm_name == "world" else MPI.COMM_SELF
+    plate = PathPlate(path_length=32.0, half_width=200.0, size_on_path=dx, size_far=40.0)
+    return create_path_plate(plate, comm)
+
+
+def _kgd(
+    dx: float,
+    stress: float = 0.0,
+    comm_name: str = "world",
+    fluid: Fluid | None = None,
+    rate: float = Q0,
+    strength: float = 0.0,
+    **settings,
+) -> HydraulicFracture:
+    solid = CDEMSolid(
+        _path_mesh(dx, comm_name),
+        ROCK,
+        InSituStress(stress, stress, stress),
+        InterfaceModel(alpha=1e3, tensile_strength=strength, cohesion=1e10, break_rule="all"),
+        zone="path",
+        rollers={"symmetry_x": 0},
+        fixed=("outer",),
+    )
+    opts = dict(injection_point=(0.0, 0.0), filling="no_lag", dt_initial=0.5, dt_max=0.5)
+    opts.update(initial_pressure=stress)
+    opts.update(settings)
+    return HydraulicFracture(
+        solid, fluid or Fluid(viscosity=1e-3), Injection.constant_rate(rate / 2), FlowSettings(**opts)
+    )
+
+
+@cache
+def _kgd_run(stress: float):
+    hf = _kgd(0.5, stress)
+    hf.run(10.0)
+    return hf
+
+
+@pytest.mark.parametrize("stress", [0.0, 5e6])
+def test_kgd_viscosity_dominated_within_10_percent(stress):
+    hf = _kgd_run(stress)
+    ref = kgd_viscosity(10.0, Q0, ROCK.youngs_modulus, ROCK.poisson_ratio, 1e-3)
+    half_length = hf.wet_extent((0.0, 0.0), (1.0, 0.0))
+    net_pressure = hf.p_cavity - stress
+    assert half_length == pytest.approx(ref.half_length, rel=0.10)
+    assert net_pressure == pytest.approx(ref.net_pressure, rel=0.10)
+    assert hf.opening_at_cavity() == pytest.approx(ref.inlet_opening, rel=0.10)
+
+
+def test_kgd_mass_balance_every_step():
+    hf = _kgd_run(0.0)
+    assert len(hf.history) >= 20
+    assert max(r.mass_error for r in hf.history) < 1e-6
+    assert max(r.volume_mismatch for r in hf.history) < 1e-6
+    # the fluid is in the fracture (no cavity volume at a KGD inlet)
+    last = hf.history[-1]
+    assert last.fracture_fluid == pytest.approx(last.injected_volume, rel=1e-6)
+
+
+def test_kgd_toughness_dominated_grows_as_t_to_two_thirds():
+    # strength-based toughness, uniform pressure (the cheap fidelity), low viscosity
+    hf = _kgd(
+        0.5, strength=10e6, fidelity="uniform", dt_initial=0.05, dt_max=0.5, filling="no_lag"
+    )
+    times, lengths = [], []
+    while hf.t < 20.0:
+        rec = hf.step()
+        times.append(rec.time)
+        lengths.append(hf.wet_extent((0.0, 0.0), (1.0, 0.0)))
+    t, length = np.array(times), np.array(lengths)
+    sel = (length > 8.0) & (length < 24.0)  # far from the 1 m start, before the path ends
+    assert sel.sum() > 10
+    exponent = np.polyfit(np.log(t[sel]), np.log(length[sel]), 1)[0]
+    assert exponent == pytest.approx(2.0 / 3.0, rel=0.05)
+
+
+def test_pressure_history_is_rank_independent():
+    """The same KGD run on every rank alone and on all ranks together."""
+    runs = []
+    for name in ("self", "world"):
+        hf = _kgd(1.0, comm_name=name)
+        hf.run(3.0)
+        runs.append(np.array([r.injection_pressure for r in hf.history]))
+    assert runs[0].shape == runs[1].shape
+    np.testing.assert_allclose(runs[0], runs[1], rtol=1e-8)
+
+
+def test_leak_off_is_balanced_and_shortens_the_fracture():
+    plain = _kgd(1.0)
+    plain.run(4.0)
+    leaky = _kgd(1.0, leak_off=CarterLeakOff(1e-4))
+    leaky.run(4.0)
+    last = leaky.history[-1]
+    assert last.leaked_volume > 0.05 * last.injected_volume
+    assert max(r.mass_error for r in leaky.history) < 1e-6
+    assert last.fracture_fluid + last.leaked_volume == pytest.approx(last.injected_volume, rel=1e-6)
+    assert leaky.wet_extent((0, 0), (1, 0)) <= plain.wet_extent((0, 0), (1, 0))
+
+
+# ----------------------------------------------------------- borehole breakdown
+
+A = 0.03  # seed 001: 60 mm borehole in a 1 m block, SH 20 MPa
+
+
+@cache
+def _borehole_mesh():
+    return create_borehole_plate(BoreholePlate(A, 0.5, A / 10, 0.1, quarter=False, ring_layers=4))
+
+
+def _borehole(sh_min: float, rate: float = 2e-6, fidelity: str = "uniform", **fluid):
+    solid = CDEMSolid(
+        _borehole_mesh(),
+        ElasticMaterial(20e9, 0.25),
+        InSituStress(sh_max=20e6, sh_min=sh_min, sv=20e6),
+        InterfaceModel(
+            alpha=100, tensile_strength=5e6, cohesion=60e6, friction_angle=30, break_rule="all"
+        ),
+        zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
+        fixed=("outer",),
+    )
+    return HydraulicFracture(
+        solid,
+        Fluid(**fluid),
+        Injection.constant_rate(rate),
+        FlowSettings(cavity=("wellbore_wall",), fidelity=fidelity, dt_initial=0.5, dt_max=1.0),
+    )
+
+
+def _breakdown(hf: HydraulicFracture, t_max: float):
+    while hf.t < t_max:
+        hf.step()
+        found = detect_breakdown(
+            [r.time for r in hf.history], [r.injection_pressure for r in hf.history]
+        )
+        if found is not None:
+            return found
+    return None
+
+
+@cache
+def _borehole_breakdown(sh_min: float, rate: float = 2e-6, fidelity: str = "uniform", mu=1e-3):
+    extra = {"residual_aperture": 1e-6} if fidelity == "viscous" else {}
+    hf = _borehole(sh_min, rate, fidelity, viscosity=mu, **extra)
+    return hf, _breakdown(hf, 60.0 * 2e-6 / rate)
+
+
+def test_borehole_pressure_rises_peaks_and_drops():
+    hf, found = _borehole_breakdown(12e6)
+    assert found is not None
+    p = np.array([r.injection_pressure for r in hf.history])
+    t = np.array([r.time for r in hf.history])
+    before = p[t <= found.time]
+    assert np.all(np.diff(before) > 0.0)  # storage and wall compliance: a rising line
+    assert p[-1] < found.pressure
+    assert hf.first_break_time is not None and hf.first_break_time <= found.confirmed_at
+    assert max(r.mass_error for r in hf.history) < 1e-6
+
+
+def test_borehole_peak_moves_with_the_stress_ratio_as_hubbert_willis():
+    _, low = _borehole_breakdown(12e6)
+    _, high = _borehole_breakdown(15e6)
+    assert low is not None and high is not None
+    # Hubbert-Willis: 3 Sh - SH + T, so 3 MPa more Sh is 9 MPa more breakdown pressure
+    assert high.pressure - low.pressure == pytest.approx(9e6, rel=0.10)
+
+
+def test_borehole_higher_rate_or_viscosity_does_not_lower_the_peak():
+    _, base = _borehole_breakdown(12e6)
+    _, fast = _borehole_breakdown(12e6, rate=2e-5)
+    _, viscous = _borehole_breakdown(12e6, fidelity="viscous", mu=1e-3)
+    assert base is not None and fast is not None and viscous is not None
+    assert fast.pressure >= base.pressure * (1 - 1e-3)
+    assert viscous.pressure >= base.pressure * (1 - 1e-3)
+
+
+def test_pressure_schedule_follows_the_pump_and_balances():
+    solid_hf = _borehole(12e6)
+    hf = HydraulicFracture(
+        solid_hf.solid,
+        Fluid(),
+        Injection.pressure_schedule([(0.0, 0.0), (10.0, 10e6)]),
+        FlowSettings(cavity=("wellbore_wall",), fidelity="uniform", dt_initial=1.0, dt_max=1.0),
+    )
+    hf.run(5.0)
+    last = hf.history[-1]
+    assert last.injection_pressure == pytest.approx(5e6, rel=1e-9)
+    assert last.injected_volume > 0.0
+    assert max(r.mass_error for r in hf.history) < 1e-6
+
+
+# ------------------------------------------------------------------ extremes
+
+
+@pytest.mark.parametrize(
+    "case",
+    [
+        {"fluid": Fluid(viscosity=1e-4)},
+        {"fluid": Fluid(viscosity=1e3)},
+        {"rate": 1e-10},
+        {"rate": 1e-3},
+        {"fluid": Fluid(bulk_modulus=10e6)},
+        {"fluid": Fluid(bulk_modulus=2.2e9)},
+        {"dt_initial": 50.0, "dt_max": 50.0},  # 100x the 0.5 s the KGD runs take
+    ],
+    ids=["mu=1e-4", "mu=1e3", "Q=1e-10", "Q=1e-3", "Kw=10MPa", "Kw=2.2GPa", "dt=100x"],
+)
+def test_extremes_solve_or_stop_with_a_diagnostic(case):
+    hf = _kgd(2.0, **case)
+    t_end = 50.0 if case.get("dt_initial") == 50.0 else 2.0
+    try:
+        hf.run(t_end)
+    except SimulationStopped as stop:
+        assert "t =" in str(stop)
+    assert hf.history, "at least one step is kept"
+    for rec in hf.history:
+        assert math.isfinite(rec.injection_pressure)
+        assert rec.fracture_volume >= 0.0
+    assert np.all(hf.apertures() >= 0.0)
+    assert np.all(np.isfinite(hf.pressure))
+
+
+def test_bad_settings_name_the_field():
+    with pytest.raises(ValueError, match="fidelity"):
+        FlowSettings(cavity=("wellbore_wall",), fidelity="exact")
+    with pytest.raises(ValueError, match="injection_point"):
+        FlowSettings()
+    with pytest.raises(ValueError, match="dt_initial"):
+        FlowSettings(injection_point=(0, 0), dt_initial=-1.0)
+    with pytest.raises(KeyError, match="nowhere"):
+        _kgd(2.0, cavity=("nowhere",))
