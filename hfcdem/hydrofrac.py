@@ -260,7 +260,7 @@ class HydraulicFracture:
         solid = self.solid
         local = self._fracture_facets()
         owned = local[solid.owned[local]]
-        keys = np.sort(solid.vertex_ids[owned], axis=1)
+        keys = solid.vertex_ids[owned]  # unsorted: build_network orders ids and coordinates together
         net, _ = build_network(
             self.comm,
             keys,
