@@ -90,12 +90,12 @@ class Injection:
     @classmethod
     def rate_schedule(cls, points: Sequence[Sequence[float]]) -> Injection:
         """Inject at a piecewise-linear rate given as ``(time s, rate m^3/s)`` points."""
-        return cls("rate", tuple(tuple(p) for p in points))  # type: ignore[arg-type]
+        return cls("rate", tuple((float(t), float(q)) for t, q in points))
 
     @classmethod
     def pressure_schedule(cls, points: Sequence[Sequence[float]]) -> Injection:
         """Hold the cavity at a piecewise-linear pressure ``(time s, pressure Pa)``."""
-        return cls("pressure", tuple(tuple(p) for p in points))  # type: ignore[arg-type]
+        return cls("pressure", tuple((float(t), float(v)) for t, v in points))
 
     @property
     def rate_controlled(self) -> bool:
@@ -130,7 +130,9 @@ class CarterLeakOff:
     def __post_init__(self) -> None:
         _check_range("leak-off coefficient C_L", self.coefficient, 0.0, 1e-2, "m/s^0.5")
 
-    def volume(self, area: np.ndarray, wetted_since: np.ndarray, t0: float, t1: float) -> np.ndarray:
+    def volume(
+        self, area: np.ndarray, wetted_since: np.ndarray, t0: float, t1: float
+    ) -> np.ndarray:
         """Volume lost through both faces of facets of ``area`` during ``[t0, t1]``."""
         start = np.maximum(t0 - wetted_since, 0.0)
         end = np.maximum(t1 - wetted_since, 0.0)

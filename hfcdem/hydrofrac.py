@@ -93,7 +93,9 @@ class FlowSettings:
         if self.filling not in ("saturation", "no_lag"):
             raise ValueError(f"filling must be 'saturation' or 'no_lag', got {self.filling!r}")
         if not self.cavity and self.injection_point is None:
-            raise ValueError("give the cavity wall groups or an injection_point: fluid needs a way in")
+            raise ValueError(
+                "give the cavity wall groups or an injection_point: fluid needs a way in"
+            )
         for name in ("dt_initial", "dt_min", "dt_max"):
             value = getattr(self, name)
             if not value > 0.0:
@@ -135,7 +137,7 @@ class StepRecord:
     wall_time: float
 
     def as_row(self) -> dict[str, float]:
-        """The record as a flat dict (the columns of history.csv)."""
+        """Return the record as a flat dict (the columns of history.csv)."""
         return dict(self.__dict__)
 
 
@@ -218,7 +220,11 @@ class HydraulicFracture:
             pt[: len(ip)] = ip
             d = np.linalg.norm(x - pt, axis=1)
             i = int(np.argmin(d)) if len(d) else -1
-            best = (float(d[i]), int(self.solid.mesh.geometry.input_global_indices[i])) if i >= 0 else (math.inf, -1)
+            best = (
+                (float(d[i]), int(self.solid.mesh.geometry.input_global_indices[i]))
+                if i >= 0
+                else (math.inf, -1)
+            )
             best = min(self.comm.allgather(best))
             local = np.append(local, best[1])
         return np.unique(gather_rows(self.comm, local.astype(np.int64)))
@@ -243,7 +249,7 @@ class HydraulicFracture:
         return float(self.comm.allreduce(local, op=MPI.SUM))
 
     def _cavity_load_form(self) -> dolfinx.fem.Form | None:
-        """Unit pressure on the cavity walls: -int n.v ds (also the volume change c.u)."""
+        """Return the unit-pressure load on the cavity walls, -int n.v ds (also dV = c.u)."""
         if not self.settings.cavity:
             return None
         v, n = ufl.TestFunction(self.solid.V), ufl.FacetNormal(self.solid.mesh)
@@ -260,7 +266,9 @@ class HydraulicFracture:
         solid = self.solid
         local = self._fracture_facets()
         owned = local[solid.owned[local]]
-        keys = solid.vertex_ids[owned]  # unsorted: build_network orders ids and coordinates together
+        keys = solid.vertex_ids[
+            owned
+        ]  # unsorted: build_network orders ids and coordinates together
         net, _ = build_network(
             self.comm,
             keys,
@@ -272,7 +280,9 @@ class HydraulicFracture:
         index = net.index()
         self._local_fracture = local
         all_keys = np.sort(solid.vertex_ids[local], axis=1)
-        self._local_pos = np.array([index[tuple(int(v) for v in k)] for k in all_keys], dtype=np.int64)
+        self._local_pos = np.array(
+            [index[tuple(int(v) for v in k)] for k in all_keys], dtype=np.int64
+        )
         self._owned_sel = solid.owned[local]
         # open (fluid-loaded) facets in network order
         is_open = np.zeros(net.size)
@@ -342,11 +352,9 @@ class HydraulicFracture:
         solid.solve_load(ksp, a_form, solid.load_form(Loads(cavity=cavity_names)), base)
         # unit pressure per group on its open facets, plus the walls for the cavity group
         v, nrm = ufl.TestFunction(solid.V), ufl.FacetNormal(solid.mesh)
-        q = dolfinx.fem.Function(dolfinx.fem.functionspace(solid.mesh, ("DG", 0)))
         # per-facet values through a CR function (exact at the single quadrature point)
         cr = solid._facet_function(np.zeros(solid.num_facets))
         dS = ufl.Measure("dS", domain=solid.mesh, subdomain_data=solid._interface_tags())
-        del q
         L = -cr("+") * ufl.dot(nrm("+"), ufl.jump(v)) * dS(_OPEN, metadata={"quadrature_degree": 1})
         c_cav = dolfinx.fem.Constant(solid.mesh, dolfinx.default_scalar_type(0.0))
         if self.settings.cavity:
@@ -393,8 +401,11 @@ class HydraulicFracture:
         self.rebuild_seconds = getattr(self, "rebuild_seconds", 0.0) + time.perf_counter() - t0
 
     def _offsets(self) -> np.ndarray:
-        """Intact pre-compression offset of each broken facet; also stores the in-situ
-        normal stress (compression positive) per facet in ``self.closure_stress``."""
+        """Return the intact pre-compression offset of each broken facet.
+
+        Also stores the in-situ normal stress (compression positive) per facet in
+        ``self.closure_stress``.
+        """
         solid = self.solid
         sel = self._local_fracture[self._owned_sel]
         n = solid.normals[sel]
@@ -410,14 +421,16 @@ class HydraulicFracture:
 
     def _facet_pressure(self, p: np.ndarray) -> np.ndarray:
         """Pressure of every facet (dry facets 0) for group pressures (m,) or (m, k)."""
-        shape = (self.net.size,) + p.shape[1:]
+        shape = (self.net.size, *p.shape[1:])
         pf = np.zeros(shape)
         wet = self.group >= 0
         pf[wet] = p[self.group[wet]]
         return pf
 
     def _volumes(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return self.op.v0.reshape(-1, *([1] * (p.ndim - 1))) + self.op.h @ p, self.op.vc0 + self.op.hc @ p
+        return self.op.v0.reshape(
+            -1, *([1] * (p.ndim - 1))
+        ) + self.op.h @ p, self.op.vc0 + self.op.hc @ p
 
     def _fluxes(
         self, p: np.ndarray, vf: np.ndarray, frozen: np.ndarray | None = None
@@ -440,7 +453,11 @@ class HydraulicFracture:
         pc = p[0]
         sat = np.ones_like(vf)
         dry = self.group < 0
-        sat[dry] = np.clip(self.content[dry].reshape(-1, *([1] * (p.ndim - 1))) / np.maximum(vf[dry], 1e-300), 0.0, 1.0)
+        sat[dry] = np.clip(
+            self.content[dry].reshape(-1, *([1] * (p.ndim - 1))) / np.maximum(vf[dry], 1e-300),
+            0.0,
+            1.0,
+        )
         fa = net.entry_facet[net.pair_a]
         inner = net.pair_b != CAVITY
         fb = np.where(inner, net.entry_facet[np.where(inner, net.pair_b, 0)], 0)
@@ -492,7 +509,9 @@ class HydraulicFracture:
             floor_k = np.maximum(vf_k, self.net.area * _APERTURE_FLOOR)
             stored = vf + _col(floor_k, p) * pf / kw
             cav_stored = vc + max(float(vc_k), 0.0) * p[0] / kw
-        np.add.at(r, self.group[wet], stored[wet] - self.content[wet].reshape(-1, *([1] * (p.ndim - 1))))
+        np.add.at(
+            r, self.group[wet], stored[wet] - self.content[wet].reshape(-1, *([1] * (p.ndim - 1)))
+        )
         r[0] += cav_stored - self.cavity_content
         net = self.net
         fa = net.entry_facet[net.pair_a]
@@ -564,7 +583,9 @@ class HydraulicFracture:
         """Solve the group equations with SNES; returns pressures, iterations, converged."""
         m = self.m
         scale = max(
-            self.cavity_content + float(self.content.sum()) + abs(source if self.injection.rate_controlled else 0.0),
+            self.cavity_content
+            + float(self.content.sum())
+            + abs(source if self.injection.rate_controlled else 0.0),
             float(self.net.area.sum()) * _APERTURE_FLOOR,
             1e-30,
         )
@@ -611,18 +632,18 @@ class HydraulicFracture:
         if not ok and np.all(np.isfinite(p)):
             # stagnation just above the tolerance (finite-difference Jacobian near a
             # closing facet) still leaves a usable state: content is conserved exactly
-            ok = float(np.max(np.abs(self._residual(p, dt, source, leak)))) <= 1e4 * self._atol(source)
+            ok = float(np.max(np.abs(self._residual(p, dt, source, leak)))) <= 1e4 * self._atol(
+                source
+            )
         ok = ok and bool(np.all(np.isfinite(p)))
         if not ok:
             r = self._residual(p, dt, source, leak) if np.all(np.isfinite(p)) else p
             self._newton_failure = (
                 f"SNES reason {snes.getConvergedReason()} after {its} iterations, "
                 f"|R| {np.max(np.abs(r)):.3g} m^3 vs tolerance "
-                f"{self.settings.newton_tolerance * scale:.3g}, worst group {int(np.argmax(np.abs(r)))} of {m}"
+                f"{self.settings.newton_tolerance * scale:.3g}, "
+                f"worst group {int(np.argmax(np.abs(r)))} of {m}"
             )
-            import os
-            if os.environ.get("HFCDEM_DEBUG"):
-                print("NEWTON FAIL", self._newton_failure, "p", p[:8], "cav", self.cavity_content, "content", self.content.sum(), "vc0", self.op.vc0, flush=True)
         for obj in (snes, x, f, jac):
             obj.destroy()
         return p, its, ok
@@ -634,7 +655,7 @@ class HydraulicFracture:
         p = np.full(self.m, self.settings.initial_pressure)
         vf, vc = self._volumes(p)
         kw = self.fluid.bulk_modulus
-        self.cavity_content = float(max(vc, 0.0) * (1.0 + p[0] / kw))
+        self.cavity_content = float(max(float(vc), 0.0) * (1.0 + p[0] / kw))
         wet = self.group >= 0
         self.content[wet] = vf[wet] * (1.0 + p[0] / kw)
         self.pressure[wet] = p[0]
@@ -682,7 +703,7 @@ class HydraulicFracture:
             else np.zeros(0, np.int64)
         )
         ids = np.union1d(wet_ids, self._cavity_vertices)
-        return np.isin(solid.vertex_ids, ids).any(axis=1)
+        return np.asarray(np.isin(solid.vertex_ids, ids).any(axis=1), dtype=bool)
 
     def step(self) -> StepRecord:
         """Advance one accepted time step (cutting the step on failure)."""
@@ -720,7 +741,8 @@ class HydraulicFracture:
                 counts = solid.broken_counts()
                 self.progress(
                     f"  t {t1:.6g} s, iteration {iteration}: {counts['tensile']} tensile, "
-                    f"{counts['shear']} shear, {int(self.wet.sum())} wet, {self.rebuilds} rebuilds, "
+                    f"{counts['shear']} shear, {int(self.wet.sum())} wet, "
+                    f"{self.rebuilds} rebuilds, "
                     f"last change: {getattr(self, '_last_change', '')}"
                 )
             leak = self._leak(t1)
@@ -826,7 +848,14 @@ class HydraulicFracture:
         return gain
 
     def _accept(
-        self, p: np.ndarray, dt: float, t1: float, source: float, leak: np.ndarray, its: int, changed: bool
+        self,
+        p: np.ndarray,
+        dt: float,
+        t1: float,
+        source: float,
+        leak: np.ndarray,
+        its: int,
+        changed: bool,
     ) -> StepRecord:
         kw = self.fluid.bulk_modulus
         vf, vc = self._volumes(p)
@@ -836,7 +865,7 @@ class HydraulicFracture:
         gain = self._dry_gain(p, vf, dt)
         floor = net.area * _APERTURE_FLOOR
         stored = vf + np.maximum(vf, floor) * pf / kw
-        cav_stored = float(vc + max(vc, 0.0) * p[0] / kw)
+        cav_stored = float(vc) + max(float(vc), 0.0) * float(p[0]) / kw
         injected_step = source if self.injection.rate_controlled else 0.0
         if not self.injection.rate_controlled:
             # the balance of the cavity group gives the volume pumped in this step
@@ -854,7 +883,9 @@ class HydraulicFracture:
         share[0] += cav_stored
         target = exact - resid
         factor = np.where(share != 0.0, target / np.where(share != 0.0, share, 1.0), 1.0)
-        self.content = np.where(wet, stored * factor[np.maximum(self.group, 0)], self.content + gain)
+        self.content = np.where(
+            wet, stored * factor[np.maximum(self.group, 0)], self.content + gain
+        )
         self.cavity_content = cav_stored * float(factor[0])
         self.pressure = np.where(wet, pf, 0.0)
         self.p_cavity = float(p[0])
@@ -903,7 +934,9 @@ class HydraulicFracture:
     def run(self, t_end: float, max_steps: int = 100_000) -> list[StepRecord]:
         """Step to ``t_end`` (s); progress lines go to ``progress`` if set."""
         if not (math.isfinite(t_end) and t_end > self.t):
-            raise ValueError(f"t_end must be a time in s after the current {self.t} s, got {t_end!r}")
+            raise ValueError(
+                f"t_end must be a time in s after the current {self.t} s, got {t_end!r}"
+            )
         for _ in range(max_steps):
             if self.t >= t_end * (1.0 - 1e-12):
                 break
@@ -922,7 +955,10 @@ class HydraulicFracture:
     # ------------------------------------------------------------- results
 
     def wet_extent(self, origin: Sequence[float], direction: Sequence[float]) -> float:
-        """Fluid front along ``direction`` from ``origin``: wet facets plus the filled share of the next."""
+        """Return the fluid front along ``direction`` from ``origin`` (m).
+
+        The far end of the wet facets, plus the filled share of a dry facet beyond.
+        """
         o = np.zeros(3)
         o[: len(origin)] = origin
         d = np.zeros(3)

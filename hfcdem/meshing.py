@@ -389,7 +389,9 @@ class PathPlate:
         if self.size_far < self.size_on_path:
             raise ValueError("size_far must be at least size_on_path")
         if not 0.01 <= self.growth <= 2.0:
-            raise ValueError(f"growth must be in [0.01, 2] (size per distance), got {self.growth!r}")
+            raise ValueError(
+                f"growth must be in [0.01, 2] (size per distance), got {self.growth!r}"
+            )
 
     def build(self, model: Any) -> None:
         """Create the Gmsh geometry, groups and mesh of the plate."""

@@ -62,7 +62,7 @@ class Network:
         passes fluid; members differ only by their distance to the star.
         """
         ap = aperture[self.entry_facet]
-        total = np.zeros((self.num_stars,) + ap.shape[1:])
+        total = np.zeros((self.num_stars, *ap.shape[1:]))
         np.add.at(total, self.entry_star, ap)
         count = np.bincount(self.entry_star, minlength=self.num_stars).astype(float)
         star_k = conductivity(total / _expand(np.maximum(count, 1.0), total))
@@ -79,7 +79,7 @@ class Network:
         return out
 
     def components(self) -> np.ndarray:
-        """Connected component of every facet; facets joined to the cavity get component 0."""
+        """Return the connected component of every facet (0: joined to the cavity)."""
         n = self.size
         parent = np.arange(n + 1)  # n is the cavity
 
@@ -147,7 +147,7 @@ def build_network(
     star_cross: list[float] = []
     star_cavity: list[bool] = []
     e_fac, e_star, e_geom = [], [], []
-    local_pairs = [(0,), (1,)] if nv == 2 else [(0, 1), (1, 2), (0, 2)]
+    local_pairs: list[tuple[int, ...]] = [(0,), (1,)] if nv == 2 else [(0, 1), (1, 2), (0, 2)]
     centroid = all_x.mean(axis=1) if len(all_x) else np.zeros((0, 3))
     for f in range(len(all_keys)):
         for loc in local_pairs:

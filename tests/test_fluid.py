@@ -29,9 +29,7 @@ def test_rate_schedule_volume_is_exact_for_linear_pieces():
     inj = Injection.rate_schedule([(0.0, 0.0), (10.0, 1e-3), (20.0, 1e-3)])
     assert inj.value_at(5.0) == pytest.approx(5e-4)
     assert inj.volume_between(0.0, 20.0) == pytest.approx(0.5 * 10 * 1e-3 + 10 * 1e-3)
-    assert inj.volume_between(4.0, 12.0) == pytest.approx(
-        0.5 * (4e-4 + 1e-3) * 6.0 + 2.0 * 1e-3
-    )
+    assert inj.volume_between(4.0, 12.0) == pytest.approx(0.5 * (4e-4 + 1e-3) * 6.0 + 2.0 * 1e-3)
     assert Injection.constant_rate(2e-6).volume_between(1.0, 3.0) == pytest.approx(4e-6)
 
 

@@ -53,7 +53,10 @@ def _kgd(
     opts.update(initial_pressure=stress)
     opts.update(settings)
     return HydraulicFracture(
-        solid, fluid or Fluid(viscosity=1e-3), Injection.constant_rate(rate / 2), FlowSettings(**opts)
+        solid,
+        fluid or Fluid(viscosity=1e-3),
+        Injection.constant_rate(rate / 2),
+        FlowSettings(**opts),
     )
 
 
@@ -87,9 +90,7 @@ def test_kgd_mass_balance_every_step():
 
 def test_kgd_toughness_dominated_grows_as_t_to_two_thirds():
     # strength-based toughness, uniform pressure (the cheap fidelity), low viscosity
-    hf = _kgd(
-        0.5, strength=10e6, fidelity="uniform", dt_initial=0.05, dt_max=0.5, filling="no_lag"
-    )
+    hf = _kgd(0.5, strength=10e6, fidelity="uniform", dt_initial=0.05, dt_max=0.5, filling="no_lag")
     times, lengths = [], []
     while hf.t < 20.0:
         rec = hf.step()
