@@ -31,6 +31,7 @@ records mass balance: injected = fluid in cavity + fractures + leaked.
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -46,6 +47,7 @@ from hfcdem.cdem import _OPEN, OPEN, CDEMSolid, Loads
 from hfcdem.fluid import CarterLeakOff, Fluid, Injection
 from hfcdem.interfaces import FacetState, select_breaking
 from hfcdem.network import CAVITY, Network, build_network, gather_rows
+from hfcdem.output import write_csv
 
 # a floor on storage and aperture keeps a closed, dry facet's equations regular
 _APERTURE_FLOOR = 1e-9  # m
@@ -977,6 +979,33 @@ class HydraulicFracture:
             if ahead.any():
                 reach += float(np.max(sat[ahead] * 2 * half[ahead]))
         return reach
+
+    def write_history(self, path: str | os.PathLike[str]) -> None:
+        """Write the step records as CSV (rank 0, atomically: a stopped run keeps it)."""
+        fields = list(StepRecord.__dataclass_fields__)
+        rows = [[float(getattr(r, k)) for k in fields] for r in self.history]
+        write_csv(path, fields, rows, self.comm)
+
+    def facet_fields(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Vertex coordinates (F, nv, 3) and per-facet fluid data of this rank's owned facets.
+
+        Data: fluid pressure (MPa), hydraulic aperture (m), saturation, failure
+        state (1 tensile, 2 shear), open (1) or closed (0); for
+        :func:`hfcdem.output.write_interfaces`.
+        """
+        sel = self._owned_sel
+        pos = self._local_pos[sel]
+        facets = self._local_fracture[sel]
+        vf, _ = self._volumes(self._guess())
+        sat = np.where(self.wet, 1.0, np.clip(self.content / np.maximum(vf, 1e-300), 0.0, 1.0))
+        data = {
+            "fluid_pressure_MPa": self.pressure[pos] / 1e6,
+            "aperture_m": self.apertures()[pos],
+            "saturation": sat[pos],
+            "state": self.solid.state[facets].astype(float),
+            "open": self.is_open[pos].astype(float),
+        }
+        return self.solid.vertex_coords[facets], data
 
     def apertures(self) -> np.ndarray:
         """Hydraulic aperture of every network facet (m): never negative."""

@@ -43,3 +43,15 @@ def test_borehole_breakdown_demo_breaks_along_sh_near_hubbert_willis(shared_tmp_
     for name in ("summary.json", "fracture.png", "sigma_yy.png", "interfaces.vtu"):
         assert (out / name).stat().st_size > 0, name
     assert (out / "fields.bp").is_dir()
+
+
+def test_kgd_demo_matches_the_self_similar_solution(shared_tmp_path):
+    out = shared_tmp_path / "kgd"
+    summary = load("kgd_fracture").main(["-o", str(out), "--dx", "1.0"])
+    for key in ("half_length_m", "net_pressure_MPa", "inlet_opening_mm"):
+        assert summary[key] == pytest.approx(summary[f"kgd_{key}"], rel=0.10), key
+    assert summary["max_mass_error"] < 1e-6
+    for name in ("summary.json", "history.csv", "kgd.png", "fracture.vtu"):
+        assert (out / name).stat().st_size > 0, name
+    header = (out / "history.csv").read_text().splitlines()[0].split(",")
+    assert {"time", "injection_pressure", "injected_volume", "fracture_volume"} <= set(header)

@@ -257,3 +257,20 @@ def test_bad_settings_name_the_field():
         FlowSettings(injection_point=(0, 0), dt_initial=-1.0)
     with pytest.raises(KeyError, match="nowhere"):
         _kgd(2.0, cavity=("nowhere",))
+
+
+def test_saturation_filling_tracks_a_front_at_most_one_facet_behind_the_tip():
+    hf = _kgd(1.0, filling="saturation")
+    partial = 0
+    for _ in range(8):
+        hf.step()
+        _, data = hf.facet_fields()
+        sat = data["saturation"]
+        partial += int(np.sum((sat > 0.0) & (sat < 1.0)))
+        front = hf.wet_extent((0.0, 0.0), (1.0, 0.0))
+        tip = float(np.max(hf.net.centroid[:, 0] + 0.5 * hf.net.area))
+        assert front <= tip + 1e-9
+        assert tip - front <= 1.0 + 1e-9  # one facet of lag at most
+    assert hf.comm.allreduce(partial, op=MPI.SUM) > 0  # a partly filled facet was seen
+    assert max(r.mass_error for r in hf.history) < 1e-6
+    assert np.all(hf.pressure >= 0.0)  # no suction: the lag zone is at zero pressure
