@@ -86,6 +86,7 @@ class FlowSettings:
     dt_growth: float = 1.5
     max_state_iterations: int = 100
     break_tolerance: float = 0.01
+    max_pressure_change: float = 0.1
     newton_tolerance: float = 1e-10
     max_newton_iterations: int = 40
 
@@ -712,9 +713,12 @@ class HydraulicFracture:
         s = self.settings
         while True:
             dt = self.dt
+            saved = self._save_states()
             record = self._try_step(dt)
             if isinstance(record, StepRecord):
                 return record
+            # a failed or shortened attempt leaves no breaks, fills or contacts behind
+            self._restore_states(saved)
             if isinstance(record, float):  # land closer to the first break
                 self.dt = record
                 continue
@@ -726,6 +730,30 @@ class HydraulicFracture:
                     "try a smaller dt_initial, a residual aperture, or fidelity='uniform' "
                     f"({getattr(self, '_newton_failure', '')})"
                 )
+
+    def _save_states(self) -> tuple:
+        solid = self.solid
+        return (
+            solid.state.copy(),
+            solid.contact.copy(),
+            solid.friction_traction.copy(),
+            len(solid.events),
+            dict(self._content),
+            dict(self._wet_since),
+            dict(self._pressure),
+            self.first_break_time,
+            self.rebuilds,
+        )
+
+    def _restore_states(self, saved: tuple) -> None:
+        solid = self.solid
+        changed = self.rebuilds != saved[8]
+        solid.state[:], solid.contact[:], solid.friction_traction[:] = saved[:3]
+        del solid.events[saved[3] :]
+        self._content, self._wet_since, self._pressure = saved[4], saved[5], saved[6]
+        self.first_break_time = saved[7]
+        if changed:
+            self._rebuild()
 
     def _try_step(self, dt: float) -> StepRecord | float | None:
         s, solid = self.settings, self.solid
@@ -748,11 +776,18 @@ class HydraulicFracture:
                     f"last change: {getattr(self, '_last_change', '')}"
                 )
             leak = self._leak(t1)
-            p, its, ok = self._newton(dt, source, leak, self._guess(source))
+            start = self._guess(source)
+            p, its, ok = self._newton(dt, source, leak, start)
             its_total += its
             last_its = its
             if not ok:
                 return None
+            # accuracy control: the cavity pressure may move by at most max_pressure_change
+            # (relative, at least 1 MPa wide) per step, or the step is retried shorter
+            if iteration == 0 and self.history and dt > 4.0 * s.dt_min:
+                jump = abs(float(p[0]) - self.p_cavity)
+                if jump > s.max_pressure_change * max(abs(self.p_cavity), 1e6):
+                    return 0.5 * dt
             # a wet facet below zero pressure drains (saturation model)
             if s.filling == "saturation" and s.fidelity == "viscous":
                 pf = self._facet_pressure(p)
@@ -807,6 +842,10 @@ class HydraulicFracture:
                     frac = (1.0 - r0) / (worst - r0)
                     return max(dt * min(max(frac, 0.05), 0.9), s.dt_min)
                 self._step_ratio = worst
+                if r0 < 1.0 <= worst:
+                    # landed on the next break: record this state (the peak before it
+                    # breaks) and let the next step break it
+                    break
             chosen = select_breaking(
                 ratio, solid.midpoints, solid.model.break_rule, solid.model.max_breaks, self.comm
             )
@@ -939,9 +978,14 @@ class HydraulicFracture:
             raise ValueError(
                 f"t_end must be a time in s after the current {self.t} s, got {t_end!r}"
             )
-        for _ in range(max_steps):
+        for count in range(max_steps + 1):
             if self.t >= t_end * (1.0 - 1e-12):
                 break
+            if count == max_steps:
+                raise SimulationStopped(
+                    f"{max_steps} steps reached at t = {self.t:.6g} s of {t_end:g} s "
+                    f"(time step {self.dt:.3g} s): the step stayed small; the history is kept"
+                )
             self.dt = min(self.dt, t_end - self.t)
             rec = self.step()
             if self.progress is not None:
