@@ -842,7 +842,7 @@ class HydraulicFracture:
                     frac = (1.0 - r0) / (worst - r0)
                     return max(dt * min(max(frac, 0.05), 0.9), s.dt_min)
                 self._step_ratio = worst
-                if r0 < 1.0 <= worst:
+                if r0 < 1.0 <= worst and math.isfinite(worst):
                     # landed on the next break: record this state (the peak before it
                     # breaks) and let the next step break it
                     break
