@@ -86,7 +86,7 @@ class FlowSettings:
     dt_growth: float = 1.5
     max_state_iterations: int = 100
     break_tolerance: float = 0.01
-    max_pressure_change: float = 0.1
+    max_pressure_change: float = math.inf
     newton_tolerance: float = 1e-10
     max_newton_iterations: int = 40
 

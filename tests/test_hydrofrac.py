@@ -198,7 +198,8 @@ def test_borehole_higher_rate_or_viscosity_does_not_lower_the_peak():
     _, base = _borehole_breakdown(12e6)
     _, fast = _borehole_breakdown(12e6, rate=2e-5)
     assert base is not None and fast is not None
-    assert fast.pressure >= base.pressure * (1 - 1e-3)
+    # the first break is located to within FlowSettings.break_tolerance (1 %)
+    assert fast.pressure >= base.pressure * (1 - 1e-2)
     # viscous flow into the new cracks: the peak is the first break; the viscous
     # solve is not yet robust through the cascade that follows (see the README)
     hf = _borehole(12e6, fidelity="viscous", viscosity=1e-3, residual_aperture=1e-6)
