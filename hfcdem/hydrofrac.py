@@ -87,6 +87,7 @@ class FlowSettings:
     max_state_iterations: int = 100
     break_tolerance: float = 0.01
     max_pressure_change: float = math.inf
+    max_breaks_per_iteration: int | None = None
     newton_tolerance: float = 1e-10
     max_newton_iterations: int = 40
 
@@ -727,7 +728,8 @@ class HydraulicFracture:
                 raise SimulationStopped(
                     f"the coupled step failed down to dt = {dt:.3g} s (dt_min {s.dt_min:g} s) "
                     f"at t = {self.t:.6g} s: the flow equations did not converge; "
-                    "try a smaller dt_initial, a residual aperture, or fidelity='uniform' "
+                    "try max_breaks_per_iteration=1, a residual aperture, a smaller "
+                    "dt_initial, or fidelity='uniform' "
                     f"({getattr(self, '_newton_failure', '')})"
                 )
 
@@ -846,9 +848,11 @@ class HydraulicFracture:
                     # landed on the next break: record this state (the peak before it
                     # breaks) and let the next step break it
                     break
-            chosen = select_breaking(
-                ratio, solid.midpoints, solid.model.break_rule, solid.model.max_breaks, self.comm
-            )
+            if s.max_breaks_per_iteration is None:
+                rule, cap = solid.model.break_rule, solid.model.max_breaks
+            else:  # fewer new fluid cells per solve keep Newton in its basin
+                rule, cap = "cap", s.max_breaks_per_iteration
+            chosen = select_breaking(ratio, solid.midpoints, rule, cap, self.comm)
             nbreak = self.comm.allreduce(len(chosen), op=MPI.SUM)
             if nbreak:
                 self._event_cuts = 0

@@ -4,7 +4,6 @@ mass balance, rank independence, and stability at the extremes."""
 from __future__ import annotations
 
 import math
-from contextlib import nullcontext as _no_error
 from functools import cache
 
 import numpy as np
@@ -152,7 +151,14 @@ def _borehole(sh_min: float, rate: float = 2e-6, fidelity: str = "uniform", **fl
         solid,
         Fluid(**fluid),
         Injection.constant_rate(rate),
-        FlowSettings(cavity=("wellbore_wall",), fidelity=fidelity, dt_initial=0.5, dt_max=1.0),
+        FlowSettings(
+            cavity=("wellbore_wall",),
+            fidelity=fidelity,
+            dt_initial=0.5,
+            dt_max=1.0,
+            # one break per coupled solve keeps Newton in its basin through the cascade
+            max_breaks_per_iteration=1 if fidelity == "viscous" else None,
+        ),
     )
 
 
@@ -195,20 +201,16 @@ def test_borehole_peak_moves_with_the_stress_ratio_as_hubbert_willis():
 
 
 def test_borehole_higher_rate_or_viscosity_does_not_lower_the_peak():
-    _, base = _borehole_breakdown(12e6)
-    _, fast = _borehole_breakdown(12e6, rate=2e-5)
-    assert base is not None and fast is not None
+    """Viscous flow into the new cracks (seed 001 and 003 trends)."""
+    _, base = _borehole_breakdown(12e6, fidelity="viscous", mu=1e-3)
+    _, fast = _borehole_breakdown(12e6, rate=2e-5, fidelity="viscous", mu=1e-3)
+    _, thick = _borehole_breakdown(12e6, fidelity="viscous", mu=1e-1)
+    _, uniform = _borehole_breakdown(12e6)
+    assert base is not None and fast is not None and thick is not None and uniform is not None
     # the first break is located to within FlowSettings.break_tolerance (1 %)
     assert fast.pressure >= base.pressure * (1 - 1e-2)
-    # viscous flow into the new cracks: the peak is the first break; the viscous
-    # solve is not yet robust through the cascade that follows (see the README)
-    hf = _borehole(12e6, fidelity="viscous", viscosity=1e-3, residual_aperture=1e-6)
-    with _no_error():
-        while hf.first_break_time is None and hf.t < 30.0:
-            hf.step()
-    peak = max(r.injection_pressure for r in hf.history)
-    assert hf.first_break_time is not None
-    assert peak >= base.pressure * (1 - 1e-2)
+    assert thick.pressure >= base.pressure * (1 - 1e-2)
+    assert base.pressure >= uniform.pressure * (1 - 1e-2)  # uniform: the inviscid limit
 
 
 def test_pressure_schedule_follows_the_pump_and_balances():
