@@ -926,7 +926,7 @@ Geometry = PerforatedBlock | CrackPlate | KGDStrip | BoreholeSquare
 
 @dataclass(frozen=True)
 class Scene:
-    """A named scene; only its geometry is parsed so far."""
+    """A named scene: its geometry and, when the file states them, its physics."""
 
     name: str
     geometry: Geometry
@@ -935,6 +935,7 @@ class Scene:
     resolution: str = "default"
     source: str | None = None
     ignored_sections: tuple[str, ...] = field(default=())
+    physics: Any = None  # hfcdem.scene_physics.Physics when the file has physics sections
 
     def __post_init__(self) -> None:
         if not self.name or not all(c.isalnum() or c in "-_." for c in self.name):
@@ -1410,7 +1411,10 @@ def _parse_scene(
     if gt is None:
         raise SceneError("geometry", "missing; every scene needs a [geometry] table")
     geometry, preset, chosen = parse_geometry(gt.data, "geometry", resolution, size)
-    ignored = tuple(k for k in RESERVED_SECTIONS if k in data)
+    from hfcdem.scene_physics import PHYSICS_SECTIONS, parse_physics
+
+    physics = parse_physics(data) if any(k in data for k in PHYSICS_SECTIONS) else None
+    ignored = tuple(k for k in RESERVED_SECTIONS if k in data and k not in PHYSICS_SECTIONS)
     top.finish(extra=RESERVED_SECTIONS)
     return _build(
         "",
@@ -1422,6 +1426,7 @@ def _parse_scene(
         resolution=chosen,
         source=source,
         ignored_sections=ignored,
+        physics=physics,
     )
 
 

@@ -289,15 +289,10 @@ def test_bad_input_names_the_field(geometry, top, message):
     assert message in str(err.value)
 
 
-def test_reserved_sections_are_accepted_and_ignored():
-    s = parse_scene(
-        {
-            "geometry": {"catalogue": "crack_plate"},
-            "rock": {"youngs_modulus": "210 GPa"},
-            "stress": {},
-        }
-    )
-    assert s.ignored_sections == ("rock", "stress")
+def test_output_section_is_accepted_and_ignored_for_now():
+    s = parse_scene({"geometry": {"catalogue": "crack_plate"}, "output": {}})
+    assert s.ignored_sections == ("output",)
+    assert s.physics is None
 
 
 def test_load_scene_reports_the_file(tmp_path):

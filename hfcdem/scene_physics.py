@@ -1,0 +1,237 @@
+"""The physics sections of a scene file: rock, stress, fluid, injection, solver.
+
+Every dimensional value carries its unit (``"21.5 GPa"``, ``"1e-7 m3/s"``);
+fields left out take the defaults below, and :attr:`Physics.defaulted` lists
+them so a run's record can print what was assumed.  Any invalid field raises
+:class:`~hfcdem.scene.SceneError` naming it, before anything is meshed.
+
+.. code-block:: toml
+
+    [rock]                      # ElasticMaterial + InterfaceModel
+    youngs_modulus = "21.5 GPa"
+    poisson_ratio = 0.25
+    tensile_strength = "3 MPa"
+    cohesion = "17 MPa"
+    friction_angle = "30 deg"
+    weibull_modulus = 5         # optional scatter of the strengths
+    spring_factor = 100         # alpha in kn = alpha E / h
+
+    [stress]                    # compression positive
+    sh_max = "73 MPa"
+    sh_min = "60 MPa"
+    sv = "76 MPa"
+    azimuth = "0 deg"           # of SH from the x axis
+
+    [fluid]
+    viscosity = "1 mPa.s"
+    bulk_modulus = "2.2 GPa"
+    density = "1000 kg/m3"
+    residual_aperture = "1 um"
+
+    [injection]                 # exactly one of rate, rate_schedule, pressure_schedule
+    rate = "1e-7 m3/s"
+    duration = "60 s"
+    initial_pressure = "0 MPa"
+    extra_volume = "0 m3"       # storage outside the model (not yet a unit: m3 as a number)
+
+    [solver]
+    fidelity = "uniform"        # or "viscous"
+    filling = "saturation"      # or "no_lag"
+    degree = 1                  # DG1 or DG2 blocks
+    time_step = "0.5 s"
+    max_time_step = "5 s"
+    break_rule = "all"
+    max_breaks_per_iteration = 1
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from hfcdem.fluid import Fluid, Injection
+from hfcdem.interfaces import InterfaceModel
+from hfcdem.solid import ElasticMaterial, InSituStress
+
+PHYSICS_SECTIONS = ("rock", "stress", "fluid", "injection", "solver")
+
+# in-situ stresses below this are almost surely MPa values typed with "Pa"
+_SMALLEST_STRESS = 1e3  # Pa
+_LARGEST_STRESS = 1e9  # Pa
+
+
+@dataclass(frozen=True)
+class SolverSettings:
+    """Numerical choices of a run (SI units)."""
+
+    fidelity: str = "uniform"
+    filling: str = "saturation"
+    degree: int = 1
+    time_step: float = 0.5
+    max_time_step: float = 5.0
+    break_rule: str = "all"
+    max_breaks_per_iteration: int | None = None
+
+
+@dataclass(frozen=True)
+class Physics:
+    """Everything a coupled run needs besides the mesh, complete when constructed."""
+
+    rock: ElasticMaterial
+    interfaces: InterfaceModel
+    stress: InSituStress
+    fluid: Fluid
+    injection: Injection
+    duration: float
+    initial_pressure: float
+    extra_volume: float
+    solver: SolverSettings
+    defaulted: tuple[str, ...] = field(default=())
+
+
+def parse_physics(data: Mapping[str, Any]) -> Physics:
+    """Read the physics sections of a parsed scene document (see the module docstring)."""
+    from hfcdem.scene import SceneError, _Table
+
+    defaulted: list[str] = []
+
+    def section(name: str) -> Any:
+        return _Table(data.get(name, {}), name)
+
+    def get(table: Any, key: str, kind: str, default: Any, **kw: Any) -> Any:
+        if not table.has(key):
+            defaulted.append(table.sub(key))
+        if kind == "number":
+            return table.number(key, default, **kw)
+        if kind == "string":
+            return table.string(key, default, **kw)
+        return table.quantity(key, kind, default)
+
+    def check(ok: bool, path: str, reason: str) -> None:
+        if not ok:
+            raise SceneError(path, reason)
+
+    rock = section("rock")
+    e = rock.quantity("youngs_modulus", "stress")
+    nu = rock.number("poisson_ratio")
+    check(1e6 <= e <= 1e13, "rock.youngs_modulus", f"expected 1 MPa to 10 TPa, got {e:g} Pa")
+    check(-1.0 < nu < 0.5, "rock.poisson_ratio", f"expected a value in (-1, 0.5), got {nu!r}")
+    t0 = rock.quantity("tensile_strength", "stress")
+    c0 = rock.quantity("cohesion", "stress")
+    for key, value in (("tensile_strength", t0), ("cohesion", c0)):
+        check(value >= 0.0, f"rock.{key}", f"a strength must not be negative, got {value:g} Pa")
+    phi = math.degrees(get(rock, "friction_angle", "angle", math.radians(30.0)))
+    check(0.0 <= phi < 90.0, "rock.friction_angle", f"expected 0 to 90 deg, got {phi:g} deg")
+    weibull = rock.number("weibull_modulus", None) if rock.has("weibull_modulus") else None
+    alpha = get(rock, "spring_factor", "number", 100.0)
+    rock.finish()
+
+    st = section("stress")
+    stresses = {}
+    for key in ("sh_max", "sh_min", "sv"):
+        value = st.quantity(key, "stress")
+        check(
+            value == 0.0 or _SMALLEST_STRESS <= abs(value) <= _LARGEST_STRESS,
+            f"stress.{key}",
+            f"{value:g} Pa is not a plausible in-situ stress (1 kPa to 1 GPa); did you mean MPa?",
+        )
+        stresses[key] = value
+    azimuth = math.degrees(get(st, "azimuth", "angle", 0.0))
+    st.finish()
+
+    fl = section("fluid")
+    fluid_kw = {
+        "viscosity": get(fl, "viscosity", "viscosity", 1e-3),
+        "bulk_modulus": get(fl, "bulk_modulus", "stress", 2.2e9),
+        "density": get(fl, "density", "density", 1000.0),
+        "residual_aperture": get(fl, "residual_aperture", "length", 0.0),
+    }
+    fl.finish()
+
+    inj = section("injection")
+    given = [k for k in ("rate", "rate_schedule", "pressure_schedule") if inj.has(k)]
+    check(
+        len(given) == 1,
+        "injection",
+        "give exactly one of rate, rate_schedule, pressure_schedule"
+        + (f" (got {', '.join(given)})" if given else ""),
+    )
+    if given[0] == "rate":
+        injection = Injection.constant_rate(inj.quantity("rate", "flow_rate"))
+    else:
+        points = inj.raw(given[0])
+        dim = "flow_rate" if given[0] == "rate_schedule" else "stress"
+        from hfcdem.units import parse_quantity
+
+        check(isinstance(points, list) and len(points) > 0, inj.sub(given[0]), "expected a list")
+        pairs = []
+        for i, pt in enumerate(points):
+            path = f"{inj.sub(given[0])}[{i}]"
+            check(isinstance(pt, list) and len(pt) == 2, path, "expected [time, value]")
+            pairs.append((parse_quantity(pt[0], "time", path), parse_quantity(pt[1], dim, path)))
+        try:
+            injection = (
+                Injection.rate_schedule(pairs)
+                if given[0] == "rate_schedule"
+                else Injection.pressure_schedule(pairs)
+            )
+        except ValueError as exc:
+            raise SceneError(inj.sub(given[0]), str(exc)) from None
+    duration = inj.quantity("duration", "time")
+    check(duration > 0.0, "injection.duration", f"must be positive, got {duration:g} s")
+    p0 = get(inj, "initial_pressure", "stress", 0.0)
+    extra = get(inj, "extra_volume", "number", 0.0)
+    check(extra >= 0.0, "injection.extra_volume", f"must be >= 0 m3, got {extra!r}")
+    inj.finish()
+
+    so = section("solver")
+    solver = SolverSettings(
+        fidelity=get(so, "fidelity", "string", "uniform", choices=("uniform", "viscous")),
+        filling=get(so, "filling", "string", "saturation", choices=("saturation", "no_lag")),
+        degree=get(so, "degree", "number", 1, integer=True),
+        time_step=get(so, "time_step", "time", 0.5),
+        max_time_step=get(so, "max_time_step", "time", 5.0),
+        break_rule=get(
+            so, "break_rule", "string", "all", choices=("all", "most_overstressed", "cap")
+        ),
+        max_breaks_per_iteration=(
+            so.number("max_breaks_per_iteration", integer=True)
+            if so.has("max_breaks_per_iteration")
+            else None
+        ),
+    )
+    check(solver.degree in (1, 2), "solver.degree", f"expected 1 or 2, got {solver.degree!r}")
+    for key in ("time_step", "max_time_step"):
+        value = getattr(solver, key)
+        check(value > 0.0, f"solver.{key}", f"must be a positive time, got {value:g} s")
+    so.finish()
+
+    try:
+        return Physics(
+            rock=ElasticMaterial(e, nu),
+            interfaces=InterfaceModel(
+                alpha=alpha,
+                tensile_strength=t0,
+                cohesion=c0,
+                friction_angle=phi,
+                weibull_modulus=weibull,
+                break_rule=solver.break_rule,
+            ),
+            stress=InSituStress(
+                sh_max=stresses["sh_max"],
+                sh_min=stresses["sh_min"],
+                sv=stresses["sv"],
+                azimuth_sh=azimuth,
+            ),
+            fluid=Fluid(**fluid_kw),
+            injection=injection,
+            duration=duration,
+            initial_pressure=p0,
+            extra_volume=float(extra),
+            solver=solver,
+            defaulted=tuple(defaulted),
+        )
+    except ValueError as exc:  # a range the dataclasses check themselves
+        raise SceneError("", str(exc)) from None

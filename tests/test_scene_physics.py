@@ -1,0 +1,86 @@
+"""The physics sections of scene files: units, defaults and errors that name the key."""
+
+import math
+
+import pytest
+
+from hfcdem.scene import SceneError, parse_scene
+
+GEOMETRY = {"catalogue": "borehole_plate"}
+PHYSICS = {
+    "rock": {
+        "youngs_modulus": "21.5 GPa",
+        "poisson_ratio": 0.25,
+        "tensile_strength": "3 MPa",
+        "cohesion": "17 MPa",
+    },
+    "stress": {"sh_max": "73 MPa", "sh_min": "60 MPa", "sv": "76 MPa"},
+    "injection": {"rate": "1e-7 m3/s", "duration": "60 s"},
+}
+
+
+def scene(**changes):
+    doc = {"geometry": GEOMETRY, **{k: dict(v) for k, v in PHYSICS.items()}}
+    for dotted, value in changes.items():
+        section, key = dotted.split("__")
+        doc.setdefault(section, {})
+        if value is None:
+            doc[section].pop(key, None)
+        else:
+            doc[section][key] = value
+    return parse_scene(doc)
+
+
+def test_a_minimal_physics_scene_is_complete_with_defaults():
+    phys = scene().physics
+    assert phys.rock.youngs_modulus == pytest.approx(21.5e9)
+    assert phys.interfaces.tensile_strength == pytest.approx(3e6)
+    assert phys.stress.sh_min == pytest.approx(60e6)
+    assert phys.injection.value_at(10.0) == pytest.approx(1e-7)
+    assert phys.duration == pytest.approx(60.0)
+    assert phys.fluid.viscosity == pytest.approx(1e-3)
+    assert phys.solver.fidelity == "uniform"
+    # what was assumed is listed, so a run can print it
+    assert "fluid.viscosity" in phys.defaulted
+    assert "rock.friction_angle" in phys.defaulted
+    assert "rock.youngs_modulus" not in phys.defaulted
+
+
+def test_units_convert():
+    phys = scene(
+        fluid__viscosity="100 cP", rock__friction_angle="35 deg", solver__time_step="500 ms"
+    ).physics
+    assert phys.fluid.viscosity == pytest.approx(0.1)
+    assert phys.interfaces.friction_angle == pytest.approx(35.0)
+    assert phys.solver.time_step == pytest.approx(0.5)
+    assert math.isfinite(phys.interfaces.friction)
+
+
+def test_schedules():
+    phys = scene(
+        injection__rate=None,
+        injection__pressure_schedule=[["0 s", "0 MPa"], ["10 s", "40 MPa"]],
+    ).physics
+    assert not phys.injection.rate_controlled
+    assert phys.injection.value_at(5.0) == pytest.approx(20e6)
+
+
+@pytest.mark.parametrize(
+    "changes, key",
+    [
+        ({"rock__poisson_ratio": 0.5}, "rock.poisson_ratio"),
+        ({"rock__tensile_strength": "-1 MPa"}, "rock.tensile_strength"),
+        ({"rock__youngs_modulus": 21.5e9}, "rock.youngs_modulus"),  # a number without unit
+        ({"rock__colour": "grey"}, "rock.colour"),
+        ({"stress__sh_min": "60 Pa"}, "stress.sh_min"),  # MPa typed as Pa
+        ({"stress__sh_min": None}, "stress.sh_min"),
+        ({"injection__rate": "1e-7 m3"}, "injection.rate"),
+        ({"injection__pressure_schedule": [["0 s", "1 MPa"]]}, "injection"),
+        ({"solver__fidelity": "exact"}, "solver.fidelity"),
+        ({"fluid__viscosity": "-1 mPa.s"}, "viscosity"),
+    ],
+)
+def test_bad_input_names_the_key(changes, key):
+    with pytest.raises(SceneError) as err:
+        scene(**changes)
+    assert key in str(err.value)
