@@ -77,6 +77,40 @@ def _mesh(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run(args: argparse.Namespace) -> int:
+    from mpi4py import MPI
+
+    from hfcdem.meshing import MeshingError
+    from hfcdem.run import OutputInUse, run_scene
+    from hfcdem.scene import load_scene
+    from hfcdem.units import FieldError
+
+    comm = MPI.COMM_WORLD
+
+    def say(msg: str, err: bool = False) -> None:
+        if comm.rank == 0:
+            print(msg, file=sys.stderr if err else sys.stdout, flush=True)
+
+    try:
+        scene = load_scene(args.scene, args.resolution)
+        summary = run_scene(scene, args.output, comm, force=args.force, say=say)
+    except FieldError as exc:  # bad scene input: nothing was meshed or written
+        say(f"error: {exc}", err=True)
+        return 2
+    except (OutputInUse, MeshingError) as exc:
+        say(f"error: {exc}", err=True)
+        return 3
+    bd = summary["breakdown_pressure_MPa"]
+    say(
+        f"{scene.name}: breakdown "
+        + (f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s" if bd else "not reached")
+        + f", fracture degree {summary['fracture_degree']:.4f}, "
+        f"{summary['tensile_failures']} tensile / {summary['shear_failures']} shear failures, "
+        f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
+    )
+    return 0 if summary["stopped"] is None else 4
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser of the ``hfcdem`` command."""
     parser = argparse.ArgumentParser(
@@ -107,6 +141,19 @@ def build_parser() -> argparse.ArgumentParser:
     mesh.add_argument("--scene-dir", default="meshes/scenes", metavar="DIR")
     mesh.add_argument("--no-picture", action="store_true", help="skip the PNG")
     mesh.set_defaults(func=_mesh)
+    run = sub.add_parser(
+        "run",
+        help="run a scene: inject, break, write summary.json, history.csv, pictures, fields",
+        description="Run a scene file with [rock], [stress] and [injection] sections "
+        "(serially or under mpirun).",
+    )
+    run.add_argument("scene", metavar="SCENE.toml")
+    run.add_argument("-o", "--output", required=True, metavar="DIR")
+    run.add_argument("--resolution", metavar="NAME", help="a named mesh resolution of the scene")
+    run.add_argument(
+        "--force", action="store_true", help="overwrite another scene's results in DIR"
+    )
+    run.set_defaults(func=_run)
     return parser
 
 

@@ -1,0 +1,250 @@
+"""Run a scene: mesh it, build the CDEM solid and the fluid, inject, write what people read.
+
+``hfcdem run SCENE.toml -o DIR`` calls :func:`run_scene`.  The scene file must
+state its physics (``[rock]``, ``[stress]``, ``[injection]``; see
+:mod:`hfcdem.scene_physics`).  Boundary conditions follow the tag names:
+symmetry planes are rollers, outer faces are fixed.  The fracturable zone is
+the ``fracture_path`` facet group when the scene has one (a prescribed path),
+else the ``fracturable`` cell group, else the whole rock.  The cavity is every
+``wellbore*`` and ``perforation*`` facet group; a scene without one injects
+at its injection point.
+
+Written into DIR (rank 0, atomically): ``run.json`` at the start (the scene and
+its defaults), ``history.csv`` after every step, and at the end
+``summary.json``, ``pressure.png`` (the injection pressure with the breakdown
+marked), ``fracture.vtu`` (fluid pressure, aperture, saturation and state per
+fracture facet) and ``fields.bp`` + ``interfaces.vtu`` (displacement, stresses,
+interface states) for ParaView.  A run that stops keeps ``history.csv``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+from hfcdem.breakdown import detect_breakdown
+from hfcdem.cdem import CDEMSolid
+from hfcdem.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
+from hfcdem.info import versions
+from hfcdem.output import prepare_output_dir, write_interfaces, write_json
+from hfcdem.scene import Scene, SceneError
+
+ROLLER_AXES = {"symmetry_x": 0, "symmetry_y": 1, "symmetry_z": 2}
+
+
+class OutputInUse(RuntimeError):
+    """The output directory holds another scene's results."""
+
+
+def scene_fingerprint(scene: Scene) -> str:
+    """Return a short hash of the resolved scene (geometry and physics)."""
+    text = repr((scene.geometry, scene.physics, scene.resolution))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _claim_output(out: Path, scene: Scene, force: bool, comm: MPI.Comm) -> None:
+    """Refuse to overwrite another scene's results unless ``force``."""
+    record = out / "run.json"
+    problem = None
+    if comm.rank == 0 and record.exists() and not force:
+        try:
+            previous = json.loads(record.read_text())
+        except (OSError, json.JSONDecodeError):
+            previous = {}
+        if previous.get("fingerprint") != scene_fingerprint(scene):
+            problem = (
+                f"{out} holds the results of scene {previous.get('scene', '?')!r} "
+                f"(a different scene or settings); use --force to overwrite, or another -o"
+            )
+    problem = comm.bcast(problem, root=0)
+    if problem:
+        raise OutputInUse(problem)
+
+
+def build_solid(scene: Scene, tmesh: Any) -> CDEMSolid:
+    """Build the CDEM solid of a scene, with boundary conditions from the tag names."""
+    phys = scene.physics
+    names = tmesh.facet_names
+    if "fracture_path" in names:
+        zone: Any = "fracture_path"
+    elif "fracturable" in tmesh.cell_names:
+        zone = "fracturable"
+    else:
+        zone = None
+    rollers = {name: axis for name, axis in ROLLER_AXES.items() if name in names}
+    fixed = tuple(sorted(n for n in names if n.startswith("outer")))
+    return CDEMSolid(
+        tmesh,
+        phys.rock,
+        phys.stress,
+        phys.interfaces,
+        zone=zone,
+        degree=phys.solver.degree,
+        rollers=rollers,
+        fixed=fixed,
+    )
+
+
+def build_fracture(scene: Scene, solid: CDEMSolid) -> HydraulicFracture:
+    """Build the coupled fluid-solid model of a scene."""
+    phys = scene.physics
+    names = solid.tmesh.facet_names
+    cavity = tuple(sorted(n for n in names if n.startswith(("wellbore", "perforation"))))
+    point = getattr(scene.geometry, "injection_point", None)
+    if not cavity and point is None:
+        raise SceneError("geometry", "the scene has no wellbore, tunnel or injection point")
+    inlet = None if cavity or point is None else tuple(point[: solid.gdim])
+    settings = FlowSettings(
+        cavity=cavity,
+        injection_point=inlet,
+        fidelity=phys.solver.fidelity,
+        filling=phys.solver.filling,
+        initial_pressure=phys.initial_pressure,
+        extra_volume=phys.extra_volume,
+        dt_initial=phys.solver.time_step,
+        dt_max=phys.solver.max_time_step,
+        max_breaks_per_iteration=phys.solver.max_breaks_per_iteration,
+    )
+    return HydraulicFracture(solid, phys.fluid, phys.injection, settings)
+
+
+def run_scene(
+    scene: Scene,
+    output: str | Path,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+    force: bool = False,
+    say: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """Run ``scene`` and write its results into ``output``; return the summary."""
+    from hfcdem.scene_mesh import create_scene_mesh
+
+    if scene.physics is None:
+        raise SceneError(
+            "", "the scene states no physics: add [rock], [stress] and [injection] sections"
+        )
+    say = say or (lambda msg: None)
+    wall0 = time.perf_counter()
+    out = Path(output)
+    _claim_output(out, scene, force, comm)
+    out = prepare_output_dir(out, comm)
+    phys = scene.physics
+    write_json(
+        out / "run.json",
+        {
+            "scene": scene.name,
+            "fingerprint": scene_fingerprint(scene),
+            "source": scene.source,
+            "resolution": scene.resolution,
+            "physics": _jsonable(asdict(phys)),
+            "defaults_used": list(phys.defaulted),
+            "ranks": comm.size,
+        },
+        comm,
+    )
+    if phys.defaulted:
+        say("defaults: " + ", ".join(phys.defaulted))
+    sm = create_scene_mesh(scene, comm)
+    tmesh = sm.tmesh
+    cells = tmesh.mesh.topology.index_map(tmesh.mesh.topology.dim).size_global
+    solid = build_solid(scene, tmesh)
+    dofs = solid.V.dofmap.index_map.size_global * solid.gdim
+    say(f"{scene.name}: {cells} cells, {dofs} unknowns, {comm.size} rank(s)")
+    frac = build_fracture(scene, solid)
+    stopped = None
+    t_end = phys.duration
+    try:
+        while frac.t < t_end * (1.0 - 1e-12):
+            frac.dt = min(frac.dt, t_end - frac.t)
+            rec = frac.step()
+            frac.write_history(out / "history.csv")
+            eta = rec.wall_time / rec.time * (t_end - rec.time) if rec.time > 0 else math.nan
+            say(
+                f"t {rec.time:8.4g} s  p {rec.injection_pressure / 1e6:8.3f} MPa  "
+                f"broken {rec.tensile + rec.shear:5d}  dt {rec.dt:8.3g} s  "
+                f"wall {rec.wall_time:6.1f} s  eta {eta:6.1f} s"
+            )
+    except SimulationStopped as exc:
+        stopped = str(exc)
+        say(f"stopped: {exc}")
+    finally:
+        if frac.history:
+            frac.write_history(out / "history.csv")
+    times = [r.time for r in frac.history]
+    pressures = [r.injection_pressure for r in frac.history]
+    found = detect_breakdown(times, pressures)
+    counts = solid.broken_counts()
+    points, data = frac.facet_fields()
+    write_interfaces(out / "fracture.vtu", points, data, comm)
+    from hfcdem.output import write_solid_results
+
+    write_solid_results(out, solid, frac._set_displacement(frac._guess()), frac.t)
+    summary = {
+        "scene": scene.name,
+        "breakdown_pressure_MPa": found.pressure / 1e6 if found else None,
+        "breakdown_time_s": found.time if found else None,
+        "peak_pressure_MPa": max(pressures) / 1e6 if pressures else None,
+        "first_crack_time_s": frac.first_break_time,
+        "fracture_degree": solid.fracture_degree(),
+        "tensile_failures": counts["tensile"],
+        "shear_failures": counts["shear"],
+        "simulated_time_s": frac.t,
+        "steps": len(frac.history),
+        "rebuilds": frac.rebuilds,
+        "max_mass_error": max((r.mass_error for r in frac.history), default=0.0),
+        "cells": cells,
+        "unknowns": dofs,
+        "ranks": comm.size,
+        "wall_time_s": time.perf_counter() - wall0,
+        "stopped": stopped,
+        "versions": versions(comm),
+        "defaults_used": list(phys.defaulted),
+    }
+    write_json(out / "summary.json", summary, comm)
+    if comm.rank == 0 and pressures:
+        _plot_pressure(out / "pressure.png", times, pressures, found, scene.name)
+    comm.barrier()
+    return summary
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return str(value)
+    return value
+
+
+def _plot_pressure(path: Path, times: list[float], pressures: list[float], found: Any, name: str):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    ax.plot(times, [p / 1e6 for p in pressures], "-", label="injection pressure")
+    if found is not None:
+        ax.plot(
+            [found.time],
+            [found.pressure / 1e6],
+            "rv",
+            ms=9,
+            label=f"breakdown {found.pressure / 1e6:.2f} MPa",
+        )
+    ax.set_xlabel("time (s)")
+    ax.set_ylabel("pressure (MPa)")
+    ax.set_title(name)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

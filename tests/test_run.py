@@ -1,0 +1,60 @@
+"""`hfcdem run`: a scene file through mesh, solid, fluid and outputs."""
+
+import json
+
+import pytest
+from mpi4py import MPI
+
+from hfcdem.analytic import kgd_viscosity
+from hfcdem.cli import main
+from hfcdem.run import OutputInUse, run_scene
+from hfcdem.scene import SceneError, load_scene, parse_scene
+
+KGD = "meshes/scenes/kgd_strip.toml"
+
+
+def test_kgd_strip_scene_runs_and_matches_the_solution(shared_tmp_path):
+    out = shared_tmp_path / "kgd"
+    summary = run_scene(load_scene(KGD, "coarse"), out)
+    ref = kgd_viscosity(10.0, 4e-3, 25e9, 0.25, 1e-3)
+    assert summary["simulated_time_s"] == pytest.approx(10.0)
+    assert summary["stopped"] is None
+    assert summary["max_mass_error"] < 1e-6
+    history = (out / "history.csv").read_text().splitlines()
+    header = history[0].split(",")
+    last = dict(zip(header, map(float, history[-1].split(",")), strict=True))
+    assert last["injection_pressure"] == pytest.approx(ref.net_pressure, rel=0.10)
+    for name in ("run.json", "summary.json", "history.csv", "pressure.png", "fracture.vtu"):
+        assert (out / name).stat().st_size > 0, name
+    assert (out / "fields.bp").is_dir()
+    record = json.loads((out / "run.json").read_text())
+    assert "fluid.density" in record["defaults_used"]
+
+
+def test_another_scenes_results_are_kept_without_force(shared_tmp_path):
+    out = shared_tmp_path / "kgd"
+    run_scene(load_scene(KGD, "coarse"), out)
+    other = load_scene(KGD)  # the default resolution: a different run
+    with pytest.raises(OutputInUse, match="--force"):
+        run_scene(other, out)
+    assert json.loads((out / "run.json").read_text())["resolution"] == "coarse"
+
+
+def test_a_scene_without_physics_is_refused_before_meshing(shared_tmp_path):
+    scene = parse_scene({"geometry": {"catalogue": "crack_plate"}})
+    with pytest.raises(SceneError, match=r"\[rock\]"):
+        run_scene(scene, shared_tmp_path / "none")
+    assert not (shared_tmp_path / "none").exists()
+
+
+def test_cli_reports_bad_input_with_the_key(shared_tmp_path, capsys):
+    bad = shared_tmp_path / "bad.toml"
+    if MPI.COMM_WORLD.rank == 0:
+        text = open(KGD).read().replace("poisson_ratio = 0.25", "poisson_ratio = 0.5")
+        bad.write_text(text)
+    MPI.COMM_WORLD.barrier()
+    code = main(["run", str(bad), "-o", str(shared_tmp_path / "bad_out")])
+    assert code == 2
+    if MPI.COMM_WORLD.rank == 0:
+        assert "rock.poisson_ratio" in capsys.readouterr().err
+    assert not (shared_tmp_path / "bad_out").exists()
