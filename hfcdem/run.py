@@ -177,8 +177,9 @@ def run_scene(
     finally:
         if frac.history:
             frac.write_history(out / "history.csv")
-    times = [r.time for r in frac.history]
-    pressures = [r.injection_pressure for r in frac.history]
+    # the curve starts from the initial state, so the rise to the peak is measured from it
+    times = [0.0] + [r.time for r in frac.history]
+    pressures = [phys.initial_pressure] + [r.injection_pressure for r in frac.history]
     found = detect_breakdown(times, pressures)
     counts = solid.broken_counts()
     points, data = frac.facet_fields()
