@@ -111,6 +111,30 @@ def _run(args: argparse.Namespace) -> int:
     return 0 if summary["stopped"] is None else 4
 
 
+def _study(args: argparse.Namespace) -> int:
+    from mpi4py import MPI
+
+    from hfcdem.study import load_study, run_study
+    from hfcdem.units import FieldError
+
+    comm = MPI.COMM_WORLD
+
+    def say(msg: str, err: bool = False) -> None:
+        if comm.rank == 0:
+            print(msg, file=sys.stderr if err else sys.stdout, flush=True)
+
+    try:
+        study = load_study(args.study)
+        run_study(study, args.output, comm, groups=args.groups, force=args.force, say=say)
+    except FieldError as exc:
+        say(f"error: {exc}", err=True)
+        return 2
+    except ValueError as exc:
+        say(f"error: {exc}", err=True)
+        return 2
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Return the argument parser of the ``hfcdem`` command."""
     parser = argparse.ArgumentParser(
@@ -154,6 +178,17 @@ def build_parser() -> argparse.ArgumentParser:
         "--force", action="store_true", help="overwrite another scene's results in DIR"
     )
     run.set_defaults(func=_run)
+    study = sub.add_parser(
+        "study",
+        help="sweep a scene field over values: run the cases, write results.csv and study.png",
+    )
+    study.add_argument("study", metavar="STUDY.toml")
+    study.add_argument("-o", "--output", required=True, metavar="DIR")
+    study.add_argument(
+        "--groups", type=int, default=1, help="run this many cases at once (ranks split evenly)"
+    )
+    study.add_argument("--force", action="store_true", help="rerun cases that are done")
+    study.set_defaults(func=_study)
     return parser
 
 

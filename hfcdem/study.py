@@ -1,0 +1,246 @@
+"""Parameter studies: one scene, one field swept over values, every case run and tabled.
+
+A study file (TOML) names a scene file, the dotted key to sweep and its values,
+and optional fixed overrides::
+
+    name = "kgd_rate"
+    scene = "../meshes/scenes/kgd_strip.toml"   # relative to the study file
+    resolution = "coarse"                       # optional named mesh resolution
+
+    [sweep]
+    parameter = "injection.rate"
+    values = ["1e-3 m3/s", "2e-3 m3/s", "4e-3 m3/s"]
+
+    [set]                                       # optional, applied to every case
+    "injection.duration" = "5 s"
+
+``hfcdem study STUDY.toml -o DIR`` runs the cases into ``DIR/case_K`` one after
+another, or ``--groups G`` at once with the ranks split into G groups.  A case
+whose directory already holds its own finished results is skipped.  Then it
+writes ``results.csv`` and ``study.png`` (breakdown or peak pressure and fracture
+degree against the swept value).
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import tomllib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+from hfcdem.output import prepare_output_dir, write_csv
+from hfcdem.scene import Scene, SceneError, parse_scene
+from hfcdem.units import UNITS, FieldError, parse_quantity
+
+
+@dataclass(frozen=True)
+class Study:
+    """A validated study: the base scene document, the swept key and its values."""
+
+    name: str
+    scene_path: Path
+    base: Mapping[str, Any]
+    parameter: str
+    values: tuple[Any, ...]
+    fixed: Mapping[str, Any]
+    resolution: str | None = None
+
+    def case_document(self, k: int) -> dict[str, Any]:
+        """Return the scene document of case ``k`` (overrides applied)."""
+        doc = copy.deepcopy(dict(self.base))
+        for key, value in self.fixed.items():
+            _set(doc, key, value)
+        _set(doc, self.parameter, self.values[k])
+        return doc
+
+    def case_scene(self, k: int) -> Scene:
+        """Return the validated scene of case ``k``; errors name the case and the key."""
+        try:
+            return parse_scene(
+                self.case_document(k),
+                f"{self.name}_case{k}",
+                self.resolution,
+                None,
+                str(self.scene_path),
+            )
+        except FieldError as exc:
+            raise SceneError(
+                f"case {k} ({self.parameter} = {self.values[k]!r}): {exc.path}", exc.reason
+            ) from None
+
+
+def _set(doc: dict[str, Any], dotted: str, value: Any) -> None:
+    keys = dotted.split(".")
+    node = doc
+    for key in keys[:-1]:
+        nxt = node.setdefault(key, {})
+        if not isinstance(nxt, dict):
+            raise SceneError(dotted, f"{key!r} is not a table in the scene")
+        node = nxt
+    node[keys[-1]] = value
+
+
+def load_study(path: str | Path) -> Study:
+    """Read and validate a study file; every case's scene is checked before anything runs."""
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise SceneError("", f"cannot read study file {p}: {exc}") from None
+    known = {"name", "scene", "resolution", "sweep", "set"}
+    for key in data:
+        if key not in known:
+            raise SceneError(key, f"unknown key; a study takes: {', '.join(sorted(known))}")
+    if "scene" not in data or not isinstance(data["scene"], str):
+        raise SceneError("scene", "missing; expected the path of a scene file")
+    scene_path = (p.parent / data["scene"]).resolve()
+    try:
+        base = tomllib.loads(scene_path.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise SceneError("scene", f"cannot read {scene_path}: {exc}") from None
+    sweep = data.get("sweep")
+    if not isinstance(sweep, dict):
+        raise SceneError("sweep", "missing; expected a table with parameter and values")
+    parameter = sweep.get("parameter")
+    values = sweep.get("values")
+    if not isinstance(parameter, str) or not parameter:
+        raise SceneError("sweep.parameter", "expected a dotted scene key such as 'injection.rate'")
+    if not isinstance(values, list) or not values:
+        raise SceneError("sweep.values", "expected a non-empty list")
+    fixed = data.get("set", {})
+    if not isinstance(fixed, dict):
+        raise SceneError("set", "expected a table of dotted keys")
+    study = Study(
+        name=str(data.get("name", p.stem)),
+        scene_path=scene_path,
+        base=base,
+        parameter=parameter,
+        values=tuple(values),
+        fixed=fixed,
+        resolution=data.get("resolution"),
+    )
+    for k in range(len(values)):
+        study.case_scene(k)  # bad input stops here, before any meshing
+    return study
+
+
+def numeric(value: Any) -> float | None:
+    """Return the SI number of a swept value (a number, or a quantity with its unit)."""
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        return float(value)
+    if isinstance(value, str):
+        for dimension in UNITS:
+            try:
+                return parse_quantity(value, dimension)
+            except FieldError:
+                continue
+    return None
+
+
+def run_study(
+    study: Study,
+    output: str | Path,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+    groups: int = 1,
+    force: bool = False,
+    say: Callable[[str], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Run every case not already done; return one result row per case."""
+    from hfcdem.run import run_scene, scene_fingerprint
+
+    if not 1 <= groups <= comm.size:
+        raise ValueError(f"groups must be in [1, {comm.size}] (the rank count), got {groups}")
+    say = say or (lambda msg: None)
+    out = prepare_output_dir(output, comm)
+    color = comm.rank % groups
+    sub = comm.Split(color, comm.rank)
+    try:
+        for k in range(len(study.values)):
+            if k % groups != color:
+                continue
+            scene = study.case_scene(k)
+            case_dir = out / f"case_{k}"
+            if _done(case_dir, scene_fingerprint(scene)) and not force:
+                if sub.rank == 0:
+                    print(f"case {k}: done before, skipped", flush=True)
+                continue
+            label = f"case {k}: {study.parameter} = {study.values[k]}"
+            if sub.rank == 0:
+                print(label, flush=True)
+
+            def progress(msg: str, lab: str = label) -> None:
+                if sub.rank == 0:
+                    print(f"  [{lab}] {msg}", flush=True)
+
+            run_scene(scene, case_dir, sub, force=True, say=progress)
+    finally:
+        sub.Free()
+    comm.barrier()
+    rows = []
+    for k, value in enumerate(study.values):
+        summary_path = out / f"case_{k}" / "summary.json"
+        summary = json.loads(summary_path.read_text()) if summary_path.exists() else {}
+        rows.append({"case": k, "value": value, "x": numeric(value), **summary})
+    if comm.rank == 0:
+        _write_results(out, study, rows)
+    comm.barrier()
+    say(f"{study.name}: {len(rows)} cases; results in {out}/results.csv and study.png")
+    return rows
+
+
+def _done(case_dir: Path, fingerprint: str) -> bool:
+    try:
+        run = json.loads((case_dir / "run.json").read_text())
+        summary = json.loads((case_dir / "summary.json").read_text())
+    except (OSError, json.JSONDecodeError):
+        return False
+    return run.get("fingerprint") == fingerprint and summary.get("stopped") is None
+
+
+def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
+    cols = [
+        "case",
+        "x",
+        "breakdown_pressure_MPa",
+        "peak_pressure_MPa",
+        "fracture_degree",
+        "tensile_failures",
+        "shear_failures",
+        "wall_time_s",
+    ]
+
+    def num(v: Any) -> float:
+        return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else float("nan")
+
+    write_csv(
+        out / "results.csv", cols, [[num(r.get(c)) for c in cols] for r in rows], MPI.COMM_SELF
+    )
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    xs = [r["x"] if r["x"] is not None else r["case"] for r in rows]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
+    bd = [num(r.get("breakdown_pressure_MPa")) for r in rows]
+    pk = [num(r.get("peak_pressure_MPa")) for r in rows]
+    a1.plot(xs, pk, "s--", label="peak pressure")
+    a1.plot(xs, bd, "o-", label="breakdown pressure")
+    a1.set_ylabel("pressure (MPa)")
+    a2.plot(xs, [num(r.get("fracture_degree")) for r in rows], "o-")
+    a2.set_ylabel("fracture degree")
+    for ax in (a1, a2):
+        ax.set_xlabel(
+            study.parameter + (" (SI)" if rows and rows[0]["x"] is not None else " (case)")
+        )
+        ax.grid(alpha=0.3)
+    a1.legend()
+    fig.suptitle(study.name)
+    fig.tight_layout()
+    fig.savefig(out / "study.png", dpi=110)
+    plt.close(fig)

@@ -1,0 +1,78 @@
+"""`hfcdem study`: a sweep of one scene field, cases skipped when done."""
+
+import pytest
+from mpi4py import MPI
+
+from hfcdem.cli import main
+from hfcdem.scene import SceneError
+from hfcdem.study import load_study, numeric, run_study
+
+SCENE = "../meshes/scenes/kgd_strip.toml"
+
+
+def _write(path, text):
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(text)
+    MPI.COMM_WORLD.barrier()
+
+
+@pytest.fixture
+def study_file(shared_tmp_path):
+    import os
+
+    scene = os.path.relpath(os.path.abspath("meshes/scenes/kgd_strip.toml"), shared_tmp_path)
+    path = shared_tmp_path / "rate.toml"
+    _write(
+        path,
+        f"""
+name = "rate"
+scene = "{scene}"
+resolution = "coarse"
+[sweep]
+parameter = "injection.rate"
+values = ["1e-3 m3/s", "4e-3 m3/s"]
+[set]
+"injection.duration" = "3 s"
+""",
+    )
+    return path
+
+
+def test_study_runs_every_case_and_tables_them(study_file, shared_tmp_path):
+    out = shared_tmp_path / "out"
+    rows = run_study(load_study(study_file), out)
+    assert [r["x"] for r in rows] == [pytest.approx(1e-3), pytest.approx(4e-3)]
+    # KGD: the length grows as Q^(1/2), the net pressure does not depend on Q
+    assert rows[1]["tensile_failures"] > 1.5 * rows[0]["tensile_failures"]
+    assert rows[1]["peak_pressure_MPa"] > 0.0
+    lines = (out / "results.csv").read_text().splitlines()
+    assert len(lines) == 3 and lines[0].startswith("case,x,")
+    assert (out / "study.png").stat().st_size > 0
+    # a second run finds both cases done
+    stamp = (out / "case_0" / "summary.json").stat().st_mtime
+    assert main(["study", str(study_file), "-o", str(out)]) == 0
+    assert (out / "case_0" / "summary.json").stat().st_mtime == stamp
+
+
+def test_bad_study_input_is_named_before_running(shared_tmp_path, study_file):
+    bad = shared_tmp_path / "bad.toml"
+    _write(bad, study_file.read_text().replace('"1e-3 m3/s"', '"1e-3 m3"'))
+    with pytest.raises(SceneError, match=r"injection\.rate"):
+        load_study(bad)
+    _write(bad, study_file.read_text().replace("[sweep]", "colour = 1\n[sweep]"))
+    with pytest.raises(SceneError, match="colour"):
+        load_study(bad)
+
+
+def test_numeric_values():
+    assert numeric("4 mm") == pytest.approx(4e-3)
+    assert numeric(3) == 3.0
+    assert numeric("shape_1-1") is None
+
+
+@pytest.mark.mpi
+def test_cases_run_at_once_in_rank_groups(study_file, shared_tmp_path):
+    out = shared_tmp_path / "groups"
+    rows = run_study(load_study(study_file), out, groups=MPI.COMM_WORLD.size)
+    assert all(r.get("stopped", "missing") is None for r in rows)
+    assert all(r["ranks"] == 1 for r in rows)  # each case had its own single rank
