@@ -93,7 +93,7 @@ def _run(args: argparse.Namespace) -> int:
 
     try:
         scene = load_scene(args.scene, args.resolution)
-        summary = run_scene(scene, args.output, comm, force=args.force, say=say)
+        summary = run_scene(scene, args.output, comm, force=args.force, say=say, resume=args.resume)
     except FieldError as exc:  # bad scene input: nothing was meshed or written
         say(f"error: {exc}", err=True)
         return 2
@@ -176,6 +176,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--resolution", metavar="NAME", help="a named mesh resolution of the scene")
     run.add_argument(
         "--force", action="store_true", help="overwrite another scene's results in DIR"
+    )
+    run.add_argument(
+        "--resume", action="store_true", help="continue a stopped run from its checkpoint"
     )
     run.set_defaults(func=_run)
     study = sub.add_parser(

@@ -1028,6 +1028,76 @@ class HydraulicFracture:
                 reach += float(np.max(sat[ahead] * 2 * half[ahead]))
         return reach
 
+    # ------------------------------------------------------------ checkpoints
+
+    _SCALARS = (
+        "t",
+        "dt",
+        "injected",
+        "leaked",
+        "cavity_content",
+        "p_cavity",
+        "initial_fluid",
+        "first_break_time",
+        "_last_ratio",
+    )
+
+    def checkpoint(self) -> dict:
+        """Return the state to continue from (the same on every rank, JSON-ready).
+
+        Interfaces are keyed by their global vertex ids, so a run may resume on
+        another number of ranks.
+        """
+        solid = self.solid
+        sel = np.flatnonzero((solid.state != FacetState.INTACT) & solid.owned)
+        rows = [
+            [
+                sorted(int(v) for v in solid.vertex_ids[i]),
+                int(solid.state[i]),
+                int(solid.contact[i]),
+                [float(x) for x in solid.friction_traction[i]],
+            ]
+            for i in sel
+        ]
+        facets = [r for part in self.comm.allgather(rows) for r in part]
+
+        def table(d: dict) -> list:
+            return [[list(k), v] for k, v in sorted(d.items())]
+
+        return {
+            "scalars": {k: getattr(self, k) for k in self._SCALARS},
+            "interfaces": sorted(facets),
+            "content": table(self._content),
+            "wet_since": [
+                [k, (v if math.isfinite(v) else None)] for k, v in table(self._wet_since)
+            ],
+            "pressure": table(self._pressure),
+            "history": [r.as_row() for r in self.history],
+        }
+
+    def restore(self, data: dict) -> None:
+        """Continue from a :meth:`checkpoint` (collective)."""
+        solid = self.solid
+        ids = np.sort(np.asarray(solid.vertex_ids, dtype=np.int64), axis=1)
+        local: dict[tuple[int, ...], int] = {
+            tuple(int(v) for v in ids[i]): i for i in range(len(ids))
+        }
+        for key, state, contact, friction in data["interfaces"]:
+            i = local.get(tuple(key))
+            if i is not None:
+                solid.state[i] = state
+                solid.contact[i] = contact
+                solid.friction_traction[i] = friction
+        for k, v in data["scalars"].items():
+            setattr(self, k, v)
+        self._content = {tuple(k): float(v) for k, v in data["content"]}
+        self._wet_since = {
+            tuple(k): (math.inf if v is None else float(v)) for k, v in data["wet_since"]
+        }
+        self._pressure = {tuple(k): float(v) for k, v in data["pressure"]}
+        self.history = [StepRecord(**row) for row in data["history"]]
+        self._rebuild()
+
     def write_history(self, path: str | os.PathLike[str]) -> None:
         """Write the step records as CSV (rank 0, atomically: a stopped run keeps it)."""
         fields = list(StepRecord.__dataclass_fields__)

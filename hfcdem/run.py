@@ -122,8 +122,13 @@ def run_scene(
     comm: MPI.Comm = MPI.COMM_WORLD,
     force: bool = False,
     say: Callable[[str], None] | None = None,
+    resume: bool = False,
 ) -> dict[str, Any]:
-    """Run ``scene`` and write its results into ``output``; return the summary."""
+    """Run ``scene`` and write its results into ``output``; return the summary.
+
+    ``resume``: continue from ``checkpoint.json`` of an earlier, stopped run of
+    the same scene in ``output`` (written after every step).
+    """
     from hfcdem.scene_mesh import create_scene_mesh
 
     if scene.physics is None:
@@ -158,6 +163,17 @@ def run_scene(
     dofs = solid.V.dofmap.index_map.size_global * solid.gdim
     say(f"{scene.name}: {cells} cells, {dofs} unknowns, {comm.size} rank(s)")
     frac = build_fracture(scene, solid)
+    checkpoint = out / "checkpoint.json"
+    if resume:
+        data = comm.bcast(
+            json.loads(checkpoint.read_text()) if comm.rank == 0 and checkpoint.exists() else None,
+            root=0,
+        )
+        if data is None:
+            say("nothing to resume: no checkpoint.json; starting from t = 0")
+        else:
+            frac.restore(data)
+            say(f"resumed at t = {frac.t:.6g} s ({len(frac.history)} steps done)")
     stopped = None
     t_end = phys.duration
     try:
@@ -165,6 +181,7 @@ def run_scene(
             frac.dt = min(frac.dt, t_end - frac.t)
             rec = frac.step()
             frac.write_history(out / "history.csv")
+            write_json(checkpoint, frac.checkpoint(), comm)
             eta = rec.wall_time / rec.time * (t_end - rec.time) if rec.time > 0 else math.nan
             say(
                 f"t {rec.time:8.4g} s  p {rec.injection_pressure / 1e6:8.3f} MPa  "

@@ -58,3 +58,31 @@ def test_cli_reports_bad_input_with_the_key(shared_tmp_path, capsys):
     if MPI.COMM_WORLD.rank == 0:
         assert "rock.poisson_ratio" in capsys.readouterr().err
     assert not (shared_tmp_path / "bad_out").exists()
+
+
+def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
+    scene = load_scene(KGD, "coarse")
+    straight = shared_tmp_path / "straight"
+    run_scene(scene, straight)
+
+    class Interrupt(Exception):
+        pass
+
+    def stop_after_four_seconds(msg):
+        if msg.startswith("t ") and float(msg.split()[1]) >= 4.0:
+            raise Interrupt
+
+    out = shared_tmp_path / "resumed"
+    with pytest.raises(Interrupt):
+        run_scene(scene, out, say=stop_after_four_seconds)
+    kept = (out / "history.csv").read_text().splitlines()
+    assert 2 < len(kept) < len((straight / "history.csv").read_text().splitlines())
+    summary = run_scene(scene, out, resume=True)
+    assert summary["simulated_time_s"] == pytest.approx(10.0)
+
+    def pressures(path):
+        lines = (path / "history.csv").read_text().splitlines()
+        col = lines[0].split(",").index("injection_pressure")
+        return [float(line.split(",")[col]) for line in lines[1:]]
+
+    assert pressures(out) == pytest.approx(pressures(straight), rel=1e-9)
