@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -19,6 +20,16 @@ def _info(args: argparse.Namespace) -> int:
         for key, value in table.items():
             print(f"{key:<{width}}  {value}")
     return 0
+
+
+def _printer(comm: Any) -> Callable[..., None]:
+    """Return ``say(msg, err=False)``: print from rank 0 only (stderr for errors)."""
+
+    def say(msg: str, err: bool = False) -> None:
+        if comm.rank == 0:
+            print(msg, file=sys.stderr if err else sys.stdout, flush=True)
+
+    return say
 
 
 def _scene_files(args: argparse.Namespace) -> list[Path]:
@@ -38,9 +49,7 @@ def _mesh(args: argparse.Namespace) -> int:
 
     comm = MPI.COMM_WORLD
 
-    def say(msg: str, err: bool = False) -> None:
-        if comm.rank == 0:
-            print(msg, file=sys.stderr if err else sys.stdout, flush=True)
+    say = _printer(comm)
 
     files = _scene_files(args)
     if not files:
@@ -87,9 +96,7 @@ def _run(args: argparse.Namespace) -> int:
 
     comm = MPI.COMM_WORLD
 
-    def say(msg: str, err: bool = False) -> None:
-        if comm.rank == 0:
-            print(msg, file=sys.stderr if err else sys.stdout, flush=True)
+    say = _printer(comm)
 
     try:
         scene = load_scene(args.scene, args.resolution)
@@ -119,9 +126,7 @@ def _study(args: argparse.Namespace) -> int:
 
     comm = MPI.COMM_WORLD
 
-    def say(msg: str, err: bool = False) -> None:
-        if comm.rank == 0:
-            print(msg, file=sys.stderr if err else sys.stdout, flush=True)
+    say = _printer(comm)
 
     try:
         study = load_study(args.study)

@@ -46,7 +46,7 @@ from petsc4py import PETSc
 from hfcdem.cdem import _OPEN, OPEN, CDEMSolid, Loads
 from hfcdem.fluid import CarterLeakOff, Fluid, Injection
 from hfcdem.interfaces import FacetState, select_breaking
-from hfcdem.network import CAVITY, Network, build_network, gather_rows
+from hfcdem.network import Network, build_network, gather_rows
 from hfcdem.output import write_csv
 
 # a floor on storage and aperture keeps a closed, dry facet's equations regular
@@ -462,9 +462,7 @@ class HydraulicFracture:
             0.0,
             1.0,
         )
-        fa = net.entry_facet[net.pair_a]
-        inner = net.pair_b != CAVITY
-        fb = np.where(inner, net.entry_facet[np.where(inner, net.pair_b, 0)], 0)
+        fa, fb, inner = net.pair_facets
         pa = pf[fa]
         pb = np.where(_col(inner, p), pf[fb], pc)
         sa = sat[fa]
@@ -518,9 +516,7 @@ class HydraulicFracture:
         )
         r[0] += cav_stored - self.cavity_content
         net = self.net
-        fa = net.entry_facet[net.pair_a]
-        inner = net.pair_b != CAVITY
-        fb = np.where(inner, net.entry_facet[np.where(inner, net.pair_b, 0)], 0)
+        fa, fb, inner = net.pair_facets
         ga = self.group[fa]
         gb = np.where(inner, self.group[fb], 0)
         ok = ga >= 0
@@ -586,13 +582,7 @@ class HydraulicFracture:
     ) -> tuple[np.ndarray, int, bool]:
         """Solve the group equations with SNES; returns pressures, iterations, converged."""
         m = self.m
-        scale = max(
-            self.cavity_content
-            + float(self.content.sum())
-            + abs(source if self.injection.rate_controlled else 0.0),
-            float(self.net.area.sum()) * _APERTURE_FLOOR,
-            1e-30,
-        )
+        atol = self._atol(source)
         snes = PETSc.SNES().create(PETSc.COMM_SELF)
         snes.setOptionsPrefix("hfcdem_flow_")
         x = PETSc.Vec().createSeq(m)
@@ -619,7 +609,7 @@ class HydraulicFracture:
         snes.getKSP().getPC().setType("lu")
         snes.setTolerances(
             rtol=1e-14,
-            atol=self.settings.newton_tolerance * scale,
+            atol=atol,
             stol=1e-14,
             max_it=self.settings.max_newton_iterations,
         )
@@ -645,7 +635,7 @@ class HydraulicFracture:
             self._newton_failure = (
                 f"SNES reason {snes.getConvergedReason()} after {its} iterations, "
                 f"|R| {np.max(np.abs(r)):.3g} m^3 vs tolerance "
-                f"{self.settings.newton_tolerance * scale:.3g}, "
+                f"{atol:.3g}, "
                 f"worst group {int(np.argmax(np.abs(r)))} of {m}"
             )
         for obj in (snes, x, f, jac):
@@ -884,12 +874,10 @@ class HydraulicFracture:
         """Volume each facet receives over the step from its connections (dry ones keep it)."""
         net = self.net
         flux, _ = self._fluxes(p, vf)
-        fa = net.entry_facet[net.pair_a]
-        inner = net.pair_b != CAVITY
-        fb = net.entry_facet[net.pair_b[inner]]
+        fa, fb, inner = net.pair_facets
         gain = np.zeros(net.size)
         np.add.at(gain, fa, -dt * flux)
-        np.add.at(gain, fb, dt * flux[inner])
+        np.add.at(gain, fb[inner], dt * flux[inner])
         return gain
 
     def _accept(
@@ -1124,6 +1112,10 @@ class HydraulicFracture:
             "open": self.is_open[pos].astype(float),
         }
         return self.solid.vertex_coords[facets], data
+
+    def current_loads(self) -> Loads:
+        """Set the solid's displacement to the last accepted state; return its loads."""
+        return self._set_displacement(self._guess())
 
     def apertures(self) -> np.ndarray:
         """Hydraulic aperture of every network facet (m): never negative."""

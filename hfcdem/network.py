@@ -44,6 +44,21 @@ class Network:
     touches_cavity: np.ndarray  # (n,) facet connects to the cavity directly
 
     @property
+    def pair_facets(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Facets at the two ends of every connection: (first, second or 0, second is a facet).
+
+        Cached: the flow residual asks for it at every Newton evaluation.
+        """
+        cached = self.__dict__.get("_pair_facets")
+        if cached is None:
+            inner = self.pair_b != CAVITY
+            fa = self.entry_facet[self.pair_a]
+            fb = np.where(inner, self.entry_facet[np.where(inner, self.pair_b, 0)], 0)
+            cached = (fa, fb, inner)
+            object.__setattr__(self, "_pair_facets", cached)
+        return cached
+
+    @property
     def size(self) -> int:
         """Number of fracture facets."""
         return len(self.area)

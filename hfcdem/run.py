@@ -203,7 +203,7 @@ def run_scene(
     write_interfaces(out / "fracture.vtu", points, data, comm)
     from hfcdem.output import write_solid_results
 
-    write_solid_results(out, solid, frac._set_displacement(frac._guess()), frac.t)
+    write_solid_results(out, solid, frac.current_loads(), frac.t)
     summary = {
         "scene": scene.name,
         "breakdown_pressure_MPa": found.pressure / 1e6 if found else None,
