@@ -63,11 +63,13 @@ class Loads:
 
     ``cavity`` maps exterior facet-group names to pressure; ``crack_pressure``
     acts on every open broken or pre-existing interface (a number, or one value
-    per local facet of :attr:`CDEMSolid.facets`).
+    per local facet of :attr:`CDEMSolid.facets`).  ``joint_pressure`` (one value
+    per local facet) acts inside intact interfaces holding fluid.
     """
 
     cavity: Mapping[str, float] = field(default_factory=dict)
     crack_pressure: float | np.ndarray = 0.0
+    joint_pressure: np.ndarray | None = None
     in_situ_factor: float = 1.0
 
 
@@ -404,6 +406,16 @@ class CDEMSolid:
             pf = self._facet_function(np.asarray(loads.crack_pressure))
             L += -ufl.inner((pf("+") * eye + sigma0) * npl, ufl.jump(v)) * dS(
                 _OPEN, metadata={"quadrature_degree": 1}
+            )
+        has_joints = loads.joint_pressure is not None and bool(np.any(loads.joint_pressure))
+        if self.comm.allreduce(has_joints, op=MPI.LOR):  # collective, as below
+            jf = self._facet_function(
+                np.zeros(len(self.facets))
+                if loads.joint_pressure is None
+                else np.asarray(loads.joint_pressure)
+            )
+            L += -ufl.inner(jf("+") * npl, ufl.jump(v)) * dS(
+                _SPRING, metadata={"quadrature_degree": 1}
             )
         # collective decision: building the facet function is collective
         any_slip = self.comm.allreduce(bool(np.any(self.contact == SLIP)), op=MPI.LOR)

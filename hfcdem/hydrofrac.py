@@ -43,7 +43,7 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from hfcdem.cdem import _OPEN, OPEN, CDEMSolid, Loads
+from hfcdem.cdem import _OPEN, _SPRING, OPEN, CDEMSolid, Loads
 from hfcdem.fluid import CarterLeakOff, Fluid, Injection
 from hfcdem.interfaces import FacetState, select_breaking
 from hfcdem.network import Network, build_network, gather_rows
@@ -69,6 +69,10 @@ class FlowSettings:
     the model (the rest of the wellbore and lines).
     ``breaks_need_fluid``: an interface may break only next to fluid (a wet
     fracture facet or the cavity), the pressurisation rule of seed 000.
+    ``wet_wall_joints``: the intact interfaces that meet the cavity wall along an
+    edge (a vertex in 2D) hold fluid at the cavity pressure, so they break on
+    effective stress (p - sigma_n >= T0); the paper's CDEM lets fluid into its
+    wall joints through their initial opening.
     """
 
     cavity: tuple[str, ...] = ()
@@ -79,6 +83,7 @@ class FlowSettings:
     extra_volume: float = 0.0
     initial_pressure: float = 0.0
     breaks_need_fluid: bool = True
+    wet_wall_joints: bool = False
     leak_off: CarterLeakOff | None = None
     dt_initial: float = 0.01
     dt_min: float = 1e-9
@@ -184,6 +189,7 @@ class HydraulicFracture:
         self.leaked = 0.0
         self.rebuilds = 0
         self.first_break_time: float | None = None
+        self.initial_failures = 0
         self._last_ratio = 0.0  # worst failure ratio of eligible facets, last accepted step
         self._step_ratio = 0.0
         self._event_cuts = 0
@@ -200,7 +206,9 @@ class HydraulicFracture:
         self._wet_since: dict[tuple[int, ...], float] = {}
         self._pressure: dict[tuple[int, ...], float] = {}
         self.p_cavity = s.initial_pressure
+        self._wall_joints = self._find_wall_joints()
         self._cav_form = self._cavity_load_form()
+        self._cavity_reference: float | None = None
         self._rebuild()
         self._initialise_fluid()
 
@@ -252,13 +260,48 @@ class HydraulicFracture:
         local = dolfinx.fem.assemble_scalar(dolfinx.fem.form(form))
         return float(self.comm.allreduce(local, op=MPI.SUM))
 
+    def _find_wall_joints(self) -> np.ndarray:
+        """Flag the interfaces that share an edge (2D: a vertex) with the cavity wall."""
+        solid = self.solid
+        if not (self.settings.wet_wall_joints and self.settings.cavity):
+            return np.zeros(solid.num_facets, dtype=bool)
+        touching = np.isin(solid.vertex_ids, self._cavity_vertices).sum(axis=1)
+        return (touching >= self.gdim - 1) & ~solid.is_crack
+
+    def _intact_wall_joints(self) -> np.ndarray:
+        return self._wall_joints & (self.solid.state == FacetState.INTACT)
+
+    def _wall_joint_term(self, v: ufl.Argument, dS: ufl.Measure | None = None) -> ufl.Form | None:
+        """Return the unit pressure in the intact wall joints, -int n+.[v] dS, or None.
+
+        ``dS`` must be the interface measure of the form the term joins (one
+        subdomain_data per measure and form).
+        """
+        solid = self.solid
+        wet = self._intact_wall_joints()
+        if not self.comm.allreduce(bool(wet.any()), op=MPI.LOR):
+            return None
+        jw = solid._facet_function(wet.astype(float))
+        nrm = ufl.FacetNormal(solid.mesh)
+        if dS is None:
+            dS = ufl.Measure("dS", domain=solid.mesh, subdomain_data=solid._interface_tags())
+        return (
+            -jw("+")
+            * ufl.dot(nrm("+"), ufl.jump(v))
+            * dS(_SPRING, metadata={"quadrature_degree": 1})
+        )
+
     def _cavity_load_form(self) -> dolfinx.fem.Form | None:
-        """Return the unit-pressure load on the cavity walls, -int n.v ds (also dV = c.u)."""
+        """Return the unit-pressure load on the cavity, -int n.v ds (also dV = c.u).
+
+        With wet wall joints it includes their faces while they are intact.
+        """
         if not self.settings.cavity:
             return None
         v, n = ufl.TestFunction(self.solid.V), ufl.FacetNormal(self.solid.mesh)
         L = sum(-ufl.dot(n, v) * self.solid.tmesh.ds(name) for name in self.settings.cavity)
-        return dolfinx.fem.form(L)
+        joints = self._wall_joint_term(v)
+        return dolfinx.fem.form(L if joints is None else L + joints)
 
     # ------------------------------------------------------------- network
 
@@ -365,6 +408,10 @@ class HydraulicFracture:
             L += sum(
                 -c_cav * ufl.dot(nrm, v) * solid.tmesh.ds(name) for name in self.settings.cavity
             )
+            joints = self._wall_joint_term(v, dS)
+            if joints is not None:
+                L += c_cav * joints
+            self._cav_form = self._cavity_load_form()  # the intact joints change with breaks
         L_form = dolfinx.fem.form(L)
         _, cr_dofs = solid._cr_cache[()]
         local_group = np.full(solid.num_facets, -2, dtype=np.int64)
@@ -389,17 +436,22 @@ class HydraulicFracture:
         v0 = np.where(self.is_open, area * w0, 0.0) + area * self.fluid.residual_aperture
         h = np.zeros((self.net.size, m))
         hc = np.zeros(m)
-        vc0 = self.cavity_volume
+        wall = 0.0  # c.u of the base state: the cavity's change from the undeformed mesh
         cvec = dolfinx.fem.petsc.assemble_vector(self._cav_form) if self._cav_form else None
         if cvec is not None:
             cvec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-            vc0 += cvec.dot(base.x.petsc_vec)
+            wall = cvec.dot(base.x.petsc_vec)
         for g, col in enumerate(columns):
             h[:, g] = np.where(self.is_open, area * self._openings(col), 0.0)
             if cvec is not None:
                 hc[g] = cvec.dot(col.x.petsc_vec)
         if cvec is not None:
             cvec.destroy()
+        if self._cavity_reference is None:
+            # the mesh (and cavity_volume) is the cavity as it stands at the start, after
+            # excavation and at the initial pressure: measure wall motion from that state
+            self._cavity_reference = wall + float(hc.sum()) * self.settings.initial_pressure
+        vc0 = self.cavity_volume + wall - self._cavity_reference
         self.op = _Operator(base=base, columns=columns, v0=v0, h=h, vc0=vc0, hc=hc)
         self.rebuilds += 1
         self.rebuild_seconds = getattr(self, "rebuild_seconds", 0.0) + time.perf_counter() - t0
@@ -679,7 +731,8 @@ class HydraulicFracture:
         local = np.zeros(self.solid.num_facets)
         local[self._local_fracture] = pf[self._local_pos]
         cavity = {name: float(p[0]) for name in self.settings.cavity}
-        return Loads(cavity=cavity, crack_pressure=local)
+        joints = np.where(self._intact_wall_joints(), float(p[0]), 0.0)
+        return Loads(cavity=cavity, crack_pressure=local, joint_pressure=joints)
 
     def _eligible(self) -> np.ndarray:
         """Intact facets allowed to break: next to fluid when the settings say so."""
@@ -801,13 +854,18 @@ class HydraulicFracture:
                     continue
             loads = self._set_displacement(p)
             # contact chatter (a facet that keeps opening and closing under the same
-            # pressure) is cut off: after a few switches the step keeps the states
+            # pressure) is cut off: after a few switches only closings are allowed, so
+            # the loop ends, and no face is left open while its blocks interpenetrate
+            # (an open face has only the residual stiffness: a block it frees would fly)
             saved = (solid.contact.copy(), solid.friction_traction.copy())
             switched = solid.update_contact(loads)
+            if switched and contact_iterations >= 2:
+                keep = ~((saved[0] == OPEN) & (solid.contact != OPEN))
+                solid.contact[keep] = saved[0][keep]
+                solid.friction_traction[keep] = saved[1][keep]
+                changed = np.count_nonzero((solid.contact != saved[0]) & solid.owned)
+                switched = int(self.comm.allreduce(int(changed), op=MPI.SUM))
             contact_iterations += 1 if switched else 0
-            if switched and contact_iterations > 2:
-                solid.contact[:], solid.friction_traction[:] = saved
-                switched = 0
             if switched:
                 self._last_change = f"{switched} contacts switched"
                 solid._sync_ghost_states()
@@ -963,6 +1021,30 @@ class HydraulicFracture:
         if not changed and self._last_its <= 6:
             self.dt = min(dt * self.settings.dt_growth, self.settings.dt_max)
         return rec
+
+    def settle(self) -> int:
+        """Break what the initial state already over-stresses; return how many broke.
+
+        The excavated rock at the initial pressure may fail before any fluid is
+        pumped (e.g. shear at a tunnel root).  Those failures are counted here,
+        at t = 0, and do not count as the first crack of the injection.
+        """
+        if self.t != 0.0 or self.history:
+            raise RuntimeError("settle() must run before the first step")
+        before = sum(self.solid.broken_counts().values())
+        self._last_ratio = math.inf  # no event location: break at once
+        dt = self.dt
+        record = self._try_step(0.0)
+        self.dt = dt
+        if record is None:
+            raise SimulationStopped(
+                "the initial state did not settle: the flow equations did not converge "
+                f"({getattr(self, '_newton_failure', '')})"
+            )
+        self.history.clear()
+        self.first_break_time = None
+        self.initial_failures = sum(self.solid.broken_counts().values()) - before
+        return self.initial_failures
 
     def run(self, t_end: float, max_steps: int = 100_000) -> list[StepRecord]:
         """Step to ``t_end`` (s); progress lines go to ``progress`` if set."""

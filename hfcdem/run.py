@@ -93,11 +93,36 @@ def build_solid(scene: Scene, tmesh: Any) -> CDEMSolid:
     )
 
 
+def pressurised_groups(names: Any, wellbore: str) -> tuple[str, ...]:
+    """Return the facet groups the injection pressure loads.
+
+    A ``"cased"`` wellbore keeps the pressure off its own wall when the scene has
+    perforation tunnels (the casing carries it); otherwise every wellbore and
+    tunnel wall is loaded.
+    """
+    tunnels = tuple(sorted(n for n in names if n.startswith("perforation")))
+    if tunnels and wellbore == "cased":
+        return tunnels
+    return tuple(sorted(n for n in names if n.startswith(("wellbore", "perforation"))))
+
+
+def wall_area(tmesh: Any, groups: tuple[str, ...]) -> float:
+    """Return the total area (length in 2D) of facet groups ``groups``."""
+    import dolfinx
+
+    if not groups:
+        return 0.0
+    one = dolfinx.fem.Constant(tmesh.mesh, 1.0)
+    form = dolfinx.fem.form(sum(one * tmesh.ds(name) for name in groups))
+    local = dolfinx.fem.assemble_scalar(form)
+    return float(tmesh.mesh.comm.allreduce(local, op=MPI.SUM))
+
+
 def build_fracture(scene: Scene, solid: CDEMSolid) -> HydraulicFracture:
     """Build the coupled fluid-solid model of a scene."""
     phys = scene.physics
     names = solid.tmesh.facet_names
-    cavity = tuple(sorted(n for n in names if n.startswith(("wellbore", "perforation"))))
+    cavity = pressurised_groups(names, phys.wellbore)
     point = getattr(scene.geometry, "injection_point", None)
     if not cavity and point is None:
         raise SceneError("geometry", "the scene has no wellbore, tunnel or injection point")
@@ -109,9 +134,13 @@ def build_fracture(scene: Scene, solid: CDEMSolid) -> HydraulicFracture:
         filling=phys.solver.filling,
         initial_pressure=phys.initial_pressure,
         extra_volume=phys.extra_volume,
+        cavity_volume=(
+            None if phys.wall_film is None else phys.wall_film * wall_area(solid.tmesh, cavity)
+        ),
         dt_initial=phys.solver.time_step,
         dt_max=phys.solver.max_time_step,
         max_breaks_per_iteration=phys.solver.max_breaks_per_iteration,
+        wet_wall_joints=phys.wall_joints == "wet",
     )
     return HydraulicFracture(solid, phys.fluid, phys.injection, settings)
 
@@ -174,6 +203,10 @@ def run_scene(
         else:
             frac.restore(data)
             say(f"resumed at t = {frac.t:.6g} s ({len(frac.history)} steps done)")
+    if not frac.history:
+        failed = frac.settle()
+        if failed:
+            say(f"initial state: {failed} interfaces fail before injection (excavation)")
     stopped = None
     t_end = phys.duration
     try:
@@ -210,6 +243,7 @@ def run_scene(
         "breakdown_time_s": found.time if found else None,
         "peak_pressure_MPa": max(pressures) / 1e6 if pressures else None,
         "first_crack_time_s": frac.first_break_time,
+        "initial_failures": frac.initial_failures,
         "fracture_degree": solid.fracture_degree(),
         "tensile_failures": counts["tensile"],
         "shear_failures": counts["shear"],

@@ -33,6 +33,9 @@ them so a run's record can print what was assumed.  Any invalid field raises
     duration = "60 s"
     initial_pressure = "0 MPa"
     extra_volume = "0 m3"       # storage outside the model (not yet a unit: m3 as a number)
+    wellbore = "cased"          # or "open": does the pressure load the wellbore wall too?
+    wall_film = "5 um"          # fluid storage = film thickness x pressurised wall area
+    wall_joints = "wet"         # or "dry": fluid in the intact joints along the wall
 
     [solver]
     fidelity = "uniform"        # or "viscous"
@@ -88,6 +91,9 @@ class Physics:
     initial_pressure: float
     extra_volume: float
     solver: SolverSettings
+    wellbore: str = "cased"
+    wall_film: float | None = None
+    wall_joints: str = "dry"
     defaulted: tuple[str, ...] = field(default=())
 
 
@@ -184,6 +190,15 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
     p0 = get(inj, "initial_pressure", "stress", 0.0)
     extra = get(inj, "extra_volume", "number", 0.0)
     check(extra >= 0.0, "injection.extra_volume", f"must be >= 0 m3, got {extra!r}")
+    # perforated wells are cased: only the tunnels are open hole
+    wellbore = get(inj, "wellbore", "string", "cased", choices=("cased", "open"))
+    film = inj.quantity("wall_film", "length") if inj.has("wall_film") else None
+    joints = get(inj, "wall_joints", "string", "dry", choices=("dry", "wet"))
+    check(
+        film is None or 0.0 < film <= 1e-2,
+        "injection.wall_film",
+        f"expected a thickness in (0, 10 mm], got {film!r} m",
+    )
     inj.finish()
 
     so = section("solver")
@@ -231,6 +246,9 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             initial_pressure=p0,
             extra_volume=float(extra),
             solver=solver,
+            wellbore=wellbore,
+            wall_film=film,
+            wall_joints=joints,
             defaulted=tuple(defaulted),
         )
     except ValueError as exc:  # a range the dataclasses check themselves

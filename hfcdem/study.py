@@ -33,7 +33,7 @@ from typing import Any
 
 from mpi4py import MPI
 
-from hfcdem.output import prepare_output_dir, write_csv
+from hfcdem.output import prepare_output_dir
 from hfcdem.scene import Scene, SceneError, parse_scene
 from hfcdem.units import UNITS, FieldError, parse_quantity
 
@@ -75,14 +75,25 @@ class Study:
 
 
 def _set(doc: dict[str, Any], dotted: str, value: Any) -> None:
+    """Set ``dotted`` in ``doc``; a number indexes an array of tables (``perforations.0``)."""
     keys = dotted.split(".")
-    node = doc
-    for key in keys[:-1]:
-        nxt = node.setdefault(key, {})
-        if not isinstance(nxt, dict):
-            raise SceneError(dotted, f"{key!r} is not a table in the scene")
-        node = nxt
-    node[keys[-1]] = value
+    node: Any = doc
+    for depth, key in enumerate(keys):
+        last = depth == len(keys) - 1
+        if isinstance(node, list):
+            if not (key.isdigit() and int(key) < len(node)):
+                raise SceneError(dotted, f"{key!r}: expected an index below {len(node)}")
+            if last:
+                node[int(key)] = value
+            else:
+                node = node[int(key)]
+            continue
+        if not isinstance(node, dict):
+            raise SceneError(dotted, f"{keys[depth - 1]!r} is not a table in the scene")
+        if last:
+            node[key] = value
+        else:
+            node = node.setdefault(key, {})
 
 
 def load_study(path: str | Path) -> Study:
@@ -217,15 +228,20 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
     def num(v: Any) -> float:
         return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else float("nan")
 
-    write_csv(
-        out / "results.csv", cols, [[num(r.get(c)) for c in cols] for r in rows], MPI.COMM_SELF
-    )
+    from hfcdem.output import write_atomic
+
+    lines = [",".join(["value", *cols])]
+    for r in rows:
+        label = str(r["value"]).replace(",", ";")
+        lines.append(",".join([label] + [f"{num(r.get(c)):.10g}" for c in cols]))
+    write_atomic(out / "results.csv", "\n".join(lines) + "\n")
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    xs = [r["x"] if r["x"] is not None else r["case"] for r in rows]
+    categorical = any(r["x"] is None for r in rows)  # e.g. profile names
+    xs = [r["case"] if categorical else r["x"] for r in rows]
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
     bd = [num(r.get("breakdown_pressure_MPa")) for r in rows]
     pk = [num(r.get("peak_pressure_MPa")) for r in rows]
@@ -235,9 +251,9 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
     a2.plot(xs, [num(r.get("fracture_degree")) for r in rows], "o-")
     a2.set_ylabel("fracture degree")
     for ax in (a1, a2):
-        ax.set_xlabel(
-            study.parameter + (" (SI)" if rows and rows[0]["x"] is not None else " (case)")
-        )
+        ax.set_xlabel(study.parameter + ("" if categorical else " (SI)"))
+        if categorical:
+            ax.set_xticks(xs, [str(r["value"]) for r in rows])
         ax.grid(alpha=0.3)
     a1.legend()
     fig.suptitle(study.name)

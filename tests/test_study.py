@@ -5,7 +5,7 @@ from mpi4py import MPI
 
 from hfcdem.cli import main
 from hfcdem.scene import SceneError
-from hfcdem.study import load_study, numeric, run_study
+from hfcdem.study import _set, load_study, numeric, run_study
 
 SCENE = "../meshes/scenes/kgd_strip.toml"
 
@@ -46,7 +46,8 @@ def test_study_runs_every_case_and_tables_them(study_file, shared_tmp_path):
     assert rows[1]["tensile_failures"] > 1.5 * rows[0]["tensile_failures"]
     assert rows[1]["peak_pressure_MPa"] > 0.0
     lines = (out / "results.csv").read_text().splitlines()
-    assert len(lines) == 3 and lines[0].startswith("case,x,")
+    assert len(lines) == 3 and lines[0].startswith("value,case,x,")
+    assert lines[2].startswith("4e-3 m3/s,1,0.004,")
     assert (out / "study.png").stat().st_size > 0
     # a second run finds both cases done
     stamp = (out / "case_0" / "summary.json").stat().st_mtime
@@ -62,6 +63,16 @@ def test_bad_study_input_is_named_before_running(shared_tmp_path, study_file):
     _write(bad, study_file.read_text().replace("[sweep]", "colour = 1\n[sweep]"))
     with pytest.raises(SceneError, match="colour"):
         load_study(bad)
+
+
+def test_set_indexes_arrays_of_tables():
+    doc = {"geometry": {"perforations": [{"profile": "no2"}, {"profile": "no1"}]}}
+    _set(doc, "geometry.perforations.1.profile", "1-1")
+    assert doc["geometry"]["perforations"] == [{"profile": "no2"}, {"profile": "1-1"}]
+    with pytest.raises(SceneError, match="index below 2"):
+        _set(doc, "geometry.perforations.2.profile", "1-1")
+    with pytest.raises(SceneError, match="not a table"):
+        _set(doc, "geometry.perforations.0.profile.x", 1)
 
 
 def test_numeric_values():
