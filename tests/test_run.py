@@ -7,7 +7,7 @@ from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
 from hfcdem.cli import main
-from hfcdem.run import OutputInUse, run_scene
+from hfcdem.run import OutputInUse, pressurised_groups, run_scene
 from hfcdem.scene import SceneError, load_scene, parse_scene
 
 KGD = "meshes/scenes/kgd_strip.toml"
@@ -86,3 +86,15 @@ def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
         return [float(line.split(",")[col]) for line in lines[1:]]
 
     assert pressures(out) == pytest.approx(pressures(straight), rel=1e-9)
+
+
+def test_a_cased_wellbore_leaves_only_the_tunnel_walls_pressurised():
+    names = ["outer_x0", "perforation_1_tip", "perforation_1_wall", "rock", "wellbore_wall"]
+    assert pressurised_groups(names, "cased") == ("perforation_1_tip", "perforation_1_wall")
+    assert pressurised_groups(names, "open") == (
+        "perforation_1_tip",
+        "perforation_1_wall",
+        "wellbore_wall",
+    )
+    # a borehole without tunnels is open hole whatever the setting
+    assert pressurised_groups(["outer", "wellbore_wall"], "cased") == ("wellbore_wall",)

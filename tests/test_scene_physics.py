@@ -65,6 +65,17 @@ def test_schedules():
     assert phys.injection.value_at(5.0) == pytest.approx(20e6)
 
 
+def test_cavity_options():
+    phys = scene().physics
+    assert (phys.wellbore, phys.wall_film, phys.wall_joints) == ("cased", None, "dry")
+    assert "injection.wellbore" in phys.defaulted
+    phys = scene(
+        injection__wellbore="open", injection__wall_film="5 um", injection__wall_joints="wet"
+    ).physics
+    assert (phys.wellbore, phys.wall_joints) == ("open", "wet")
+    assert phys.wall_film == pytest.approx(5e-6)
+
+
 @pytest.mark.parametrize(
     "changes, key",
     [
@@ -78,6 +89,11 @@ def test_schedules():
         ({"injection__pressure_schedule": [["0 s", "1 MPa"]]}, "injection"),
         ({"solver__fidelity": "exact"}, "solver.fidelity"),
         ({"fluid__viscosity": "-1 mPa.s"}, "viscosity"),
+        ({"injection__wellbore": "steel"}, "injection.wellbore"),
+        ({"injection__wall_film": "5 m"}, "injection.wall_film"),
+        ({"injection__wall_film": "0 um"}, "injection.wall_film"),
+        ({"injection__wall_film": 5e-6}, "injection.wall_film"),  # a number without unit
+        ({"injection__wall_joints": "damp"}, "injection.wall_joints"),
     ],
 )
 def test_bad_input_names_the_key(changes, key):
