@@ -1195,6 +1195,36 @@ class HydraulicFracture:
         }
         return self.solid.vertex_coords[facets], data
 
+    def interface_fields(self, loads: Loads) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Vertex coordinates (F, nv, 3) and data of every owned interface facet.
+
+        Data: failure state (0 intact, 1 tensile, 2 shear), mechanical opening (m),
+        normal traction (MPa, tension positive), and the fluid's pressure (MPa),
+        saturation and hydraulic aperture (m), zero where no fluid cell is.
+        ``loads`` must be the loads of the solid's current displacement.
+        """
+        solid = self.solid
+        snap = solid.snapshot(loads)
+        n = solid.num_facets
+        pressure, saturation, aperture = np.zeros(n), np.zeros(n), np.zeros(n)
+        if self.net.size:
+            vf, _ = self._volumes(self._guess())
+            sat = np.where(self.wet, 1.0, np.clip(self.content / np.maximum(vf, 1e-300), 0.0, 1.0))
+            loc, pos = self._local_fracture, self._local_pos
+            pressure[loc] = self.pressure[pos] / 1e6
+            saturation[loc] = sat[pos]
+            aperture[loc] = self.apertures()[pos]
+        own = solid.owned
+        data = {
+            "state": solid.state[own].astype(float),
+            "opening_m": snap.opening[own],
+            "normal_traction_MPa": snap.normal_traction[own] / 1e6,
+            "fluid_pressure_MPa": pressure[own],
+            "saturation": saturation[own],
+            "aperture_m": aperture[own],
+        }
+        return solid.vertex_coords[own], data
+
     def current_loads(self) -> Loads:
         """Set the solid's displacement to the last accepted state; return its loads."""
         return self._set_displacement(self._guess())

@@ -11,6 +11,7 @@ import shutil
 import subprocess
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import dolfinx
 import dolfinx.plot
@@ -227,4 +228,82 @@ def plot_interface_states(
     fig.tight_layout()
     fig.savefig(Path(path), dpi=120)
     plt.close(fig)
+    comm.barrier()
+
+
+def _owned_boundary_triangles(tmesh: Any, names: Sequence[str]) -> np.ndarray:
+    """Vertex coordinates (F, nv, 3) of this rank's owned facets of groups ``names``."""
+    mesh = tmesh.mesh
+    fdim = mesh.topology.dim - 1
+    size = mesh.topology.index_map(fdim).size_local
+    facets = [tmesh.facets(n) for n in names]
+    local = np.unique(np.concatenate(facets)) if facets else np.zeros(0, np.int32)
+    local = local[local < size].astype(np.int32)
+    if not len(local):  # entities_to_geometry divides by the count
+        return np.zeros((0, fdim + 1, 3))
+    nodes = dolfinx.mesh.entities_to_geometry(mesh, fdim, local, False)
+    return mesh.geometry.x[nodes]
+
+
+def render_fracture_pattern(
+    path: str | os.PathLike[str],
+    points: np.ndarray,
+    states: np.ndarray,
+    walls: np.ndarray,
+    title: str,
+    view_axis: int = 1,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+) -> None:
+    """Draw broken interfaces by failure state around the cavity walls (collective).
+
+    ``points`` (F, 3, 3) and ``states`` (1 tensile, 2 shear, 0 intact: skipped)
+    are this rank's owned interface facets; ``walls`` (W, 3, 3) its cavity wall
+    triangles.  Two views: isometric, and along axis ``view_axis`` (the wellbore).
+    """
+    broken = states > 0
+    parts = comm.gather((points[broken], states[broken], walls), root=0)
+    if comm.rank != 0:
+        comm.barrier()
+        return
+    assert parts is not None
+    ensure_display()
+    import pyvista
+
+    pyvista.OFF_SCREEN = True
+
+    def surface(tris: np.ndarray) -> Any:
+        pts = tris.reshape(-1, 3)
+        faces = np.column_stack([np.full(len(tris), 3), np.arange(len(pts)).reshape(-1, 3)])
+        return pyvista.PolyData(pts, faces.ravel())
+
+    tris = np.concatenate([p for p, _, _ in parts]) if parts else np.zeros((0, 3, 3))
+    codes = np.concatenate([s for _, s, _ in parts]) if parts else np.zeros(0)
+    wall = np.concatenate([w for _, _, w in parts])
+    plotter = pyvista.Plotter(off_screen=True, shape=(1, 2), window_size=(1600, 800))
+    for col in range(2):
+        plotter.subplot(0, col)
+        if len(wall):
+            plotter.add_mesh(surface(wall), color="lightgrey", opacity=0.35)
+        for code, colour, label in ((1, "red", "tensile"), (2, "royalblue", "shear")):
+            mask = codes == code
+            if mask.any():
+                plotter.add_mesh(
+                    surface(tris[mask]),
+                    color=colour,
+                    show_edges=True,
+                    edge_color="black",
+                    line_width=0.5,
+                    label=f"{label} ({int(mask.sum())})",
+                )
+        if col == 0:
+            plotter.view_isometric()
+            plotter.add_text(title, font_size=11)
+            if codes.size:
+                plotter.add_legend(bcolor="white", face="rectangle")
+        else:
+            (plotter.view_yz, plotter.view_xz, plotter.view_xy)[view_axis]()
+            plotter.add_text(f"along {'xyz'[view_axis]} (the wellbore axis)", font_size=10)
+        plotter.show_axes()
+    plotter.screenshot(str(path))
+    plotter.close()
     comm.barrier()

@@ -12,9 +12,10 @@ at its injection point.
 Written into DIR (rank 0, atomically): ``run.json`` at the start (the scene and
 its defaults), ``history.csv`` after every step, and at the end
 ``summary.json``, ``pressure.png`` (the injection pressure with the breakdown
-marked), ``fracture.vtu`` (fluid pressure, aperture, saturation and state per
-fracture facet) and ``fields.bp`` + ``interfaces.vtu`` (displacement, stresses,
-interface states) for ParaView.  A run that stops keeps ``history.csv``.
+marked) and ``fracture.vtu`` (fluid pressure, aperture, saturation and state per
+fracture facet).  Over time, for ParaView (:mod:`hfcdem.series`): ``fields.bp``
+(displacement, normal stresses) and ``interfaces.pvd`` (failure state, opening,
+fluid pressure, saturation per interface).  A run that stops keeps what it wrote.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from mpi4py import MPI
 
 from hfcdem.breakdown import detect_breakdown
@@ -36,6 +38,7 @@ from hfcdem.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
 from hfcdem.info import versions
 from hfcdem.output import prepare_output_dir, write_interfaces, write_json
 from hfcdem.scene import Scene, SceneError
+from hfcdem.series import FieldSeries, output_times
 
 ROLLER_AXES = {"symmetry_x": 0, "symmetry_y": 1, "symmetry_z": 2}
 
@@ -203,18 +206,29 @@ def run_scene(
         else:
             frac.restore(data)
             say(f"resumed at t = {frac.t:.6g} s ({len(frac.history)} steps done)")
-    if not frac.history:
+    resumed = bool(frac.history)
+    if not resumed:
         failed = frac.settle()
         if failed:
             say(f"initial state: {failed} interfaces fail before injection (excavation)")
     stopped = None
     t_end = phys.duration
+    series = FieldSeries(out, frac, resume_from=frac.t if resumed else None)
+    interval = phys.output_interval or t_end / 20.0
+    next_frame = iter(output_times(frac.t, t_end, interval))
+    due = next(next_frame, math.inf)
+    if not resumed:
+        series.write(0.0)
     try:
         while frac.t < t_end * (1.0 - 1e-12):
             frac.dt = min(frac.dt, t_end - frac.t)
             rec = frac.step()
             frac.write_history(out / "history.csv")
             write_json(checkpoint, frac.checkpoint(), comm)
+            if rec.time >= due * (1.0 - 1e-12):
+                series.write(rec.time)
+                while due <= rec.time * (1.0 + 1e-12):
+                    due = next(next_frame, math.inf)
             eta = rec.wall_time / rec.time * (t_end - rec.time) if rec.time > 0 else math.nan
             say(
                 f"t {rec.time:8.4g} s  p {rec.injection_pressure / 1e6:8.3f} MPa  "
@@ -227,6 +241,9 @@ def run_scene(
     finally:
         if frac.history:
             frac.write_history(out / "history.csv")
+    if stopped is not None and series.frames and series.frames[-1][0] < frac.t:
+        series.write(frac.t)  # the state the run stopped in
+    series.close()
     # the curve starts from the initial state, so the rise to the peak is measured from it
     times = [0.0] + [r.time for r in frac.history]
     pressures = [phys.initial_pressure] + [r.injection_pressure for r in frac.history]
@@ -234,9 +251,6 @@ def run_scene(
     counts = solid.broken_counts()
     points, data = frac.facet_fields()
     write_interfaces(out / "fracture.vtu", points, data, comm)
-    from hfcdem.output import write_solid_results
-
-    write_solid_results(out, solid, frac.current_loads(), frac.t)
     summary = {
         "scene": scene.name,
         "breakdown_pressure_MPa": found.pressure / 1e6 if found else None,
@@ -262,8 +276,34 @@ def run_scene(
     write_json(out / "summary.json", summary, comm)
     if comm.rank == 0 and pressures:
         _plot_pressure(out / "pressure.png", times, pressures, found, scene.name)
+    if phys.pictures:
+        _picture_fracture(out / "fracture.png", scene, frac)
     comm.barrier()
     return summary
+
+
+def _picture_fracture(path: Path, scene: Scene, frac: HydraulicFracture) -> None:
+    """Draw the failure state of the interfaces (the paper's Figs. 16-17)."""
+    from hfcdem.plotting import (
+        _owned_boundary_triangles,
+        plot_interface_states,
+        render_fracture_pattern,
+    )
+
+    solid = frac.solid
+    own = solid.owned
+    points, states = solid.vertex_coords[own], solid.state[own].astype(int)
+    title = f"{scene.name}: failure state at t = {frac.t:.4g} s"
+    if solid.gdim == 2:
+        broken = points[states > 0].reshape(-1, 3)
+        reach = np.abs(broken[:, :2]).max() if len(broken) else 0.0
+        extent = solid.comm.allreduce(float(reach), op=MPI.MAX) * 1.3 or 1.0
+        plot_interface_states(path, points, states, title, extent, solid.comm)
+        return
+    walls = _owned_boundary_triangles(solid.tmesh, frac.settings.cavity)
+    wellbore = getattr(scene.geometry, "wellbore", None)
+    axis = "xyz".index(wellbore.axis) if wellbore is not None else 2
+    render_fracture_pattern(path, points, states, walls, title, axis, solid.comm)
 
 
 def _jsonable(value: Any) -> Any:

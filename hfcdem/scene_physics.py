@@ -37,6 +37,10 @@ them so a run's record can print what was assumed.  Any invalid field raises
     wall_film = "5 um"          # fluid storage = film thickness x pressurised wall area
     wall_joints = "wet"         # or "dry": fluid in the intact joints along the wall
 
+    [output]
+    interval = "5 s"            # fields over time (default: 20 frames per run)
+    pictures = true             # PNG pictures of the fracture pattern (PyVista)
+
     [solver]
     fidelity = "uniform"        # or "viscous"
     filling = "saturation"      # or "no_lag"
@@ -58,7 +62,7 @@ from hfcdem.fluid import Fluid, Injection
 from hfcdem.interfaces import InterfaceModel
 from hfcdem.solid import ElasticMaterial, InSituStress
 
-PHYSICS_SECTIONS = ("rock", "stress", "fluid", "injection", "solver")
+PHYSICS_SECTIONS = ("rock", "stress", "fluid", "injection", "solver", "output")
 
 # in-situ stresses below this are almost surely MPa values typed with "Pa"
 _SMALLEST_STRESS = 1e3  # Pa
@@ -94,6 +98,8 @@ class Physics:
     wellbore: str = "cased"
     wall_film: float | None = None
     wall_joints: str = "dry"
+    output_interval: float | None = None  # None: duration / 20
+    pictures: bool = True
     defaulted: tuple[str, ...] = field(default=())
 
 
@@ -201,6 +207,17 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
     )
     inj.finish()
 
+    out = section("output")
+    interval = out.quantity("interval", "time") if out.has("interval") else None
+    check(
+        interval is None or interval > 0.0,
+        "output.interval",
+        f"must be a positive time, got {interval!r} s",
+    )
+    pictures = out.raw("pictures", True, "true or false") if out.has("pictures") else True
+    check(isinstance(pictures, bool), "output.pictures", f"expected true or false: {pictures!r}")
+    out.finish()
+
     so = section("solver")
     solver = SolverSettings(
         fidelity=get(so, "fidelity", "string", "uniform", choices=("uniform", "viscous")),
@@ -249,6 +266,8 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             wellbore=wellbore,
             wall_film=film,
             wall_joints=joints,
+            output_interval=interval,
+            pictures=pictures,
             defaulted=tuple(defaulted),
         )
     except ValueError as exc:  # a range the dataclasses check themselves

@@ -1,0 +1,101 @@
+"""Fields over time for ParaView: a VTX folder of solid fields and a PVD of interface frames.
+
+``fields.bp`` holds the displacement and the normal stresses (MPa, tension
+positive, DG1) at every output time; ``interfaces.pvd`` lists one VTU per
+output time (``interfaces/frame_K.vtu``) with each interface's failure state,
+opening, normal traction, fluid pressure, saturation and aperture.  ParaView
+opens both as time series.  Frames are written atomically and the PVD is
+rewritten after each, so a stopped run keeps every frame it wrote.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import dolfinx
+import numpy as np
+
+from hfcdem.output import write_atomic, write_interfaces
+
+
+class FieldSeries:
+    """Write the state of a :class:`~hfcdem.hydrofrac.HydraulicFracture` at chosen times.
+
+    ``resume_from``: the simulated time a resumed run starts at; frames written
+    before it are kept and the solid fields go to ``fields_resumed.bp``.
+    """
+
+    def __init__(self, out: Path, frac: Any, resume_from: float | None = None) -> None:
+        solid = frac.solid
+        mesh, gdim = solid.mesh, solid.gdim
+        self.out, self.frac, self.comm = out, frac, mesh.comm
+        vec = dolfinx.fem.functionspace(mesh, ("DG", 1, (gdim,)))
+        scal = dolfinx.fem.functionspace(mesh, ("DG", 1))
+        self.u = dolfinx.fem.Function(vec, name="displacement")
+        self._u_expr = dolfinx.fem.Expression(solid.u, vec.element.interpolation_points())
+        sigma = solid.total_stress()
+        self.stresses = []
+        for k, axis in enumerate("xyz"[:gdim]):
+            f = dolfinx.fem.Function(scal, name=f"sigma_{axis}{axis}")
+            expr = dolfinx.fem.Expression(sigma[k, k] / 1e6, scal.element.interpolation_points())
+            self.stresses.append((f, expr))
+        name = "fields.bp" if resume_from is None else "fields_resumed.bp"
+        self.fields_path = out / name
+        self._writer = dolfinx.io.VTXWriter(
+            self.comm, self.fields_path, [self.u] + [f for f, _ in self.stresses], engine="BP4"
+        )
+        self.frames: list[tuple[float, str]] = []
+        if self.comm.rank == 0:
+            (out / "interfaces").mkdir(exist_ok=True)
+        if resume_from is not None and self.comm.rank == 0:
+            self.frames = [f for f in _read_pvd(out / "interfaces.pvd") if f[0] <= resume_from]
+        self.frames = self.comm.bcast(self.frames, root=0)
+        self.comm.barrier()
+
+    def write(self, t: float) -> None:
+        """Write the last accepted state at simulated time ``t`` (collective)."""
+        loads = self.frac.current_loads()
+        self.u.interpolate(self._u_expr)
+        for f, expr in self.stresses:
+            f.interpolate(expr)
+        self._writer.write(t)
+        points, data = self.frac.interface_fields(loads)
+        name = f"interfaces/frame_{len(self.frames):04d}.vtu"
+        write_interfaces(self.out / name, points, data, self.comm)
+        self.frames.append((t, name))
+        if self.comm.rank == 0:
+            write_atomic(self.out / "interfaces.pvd", _pvd(self.frames))
+        self.comm.barrier()
+
+    def close(self) -> None:
+        """Close the VTX writer (collective)."""
+        self._writer.close()
+
+
+def _pvd(frames: list[tuple[float, str]]) -> str:
+    rows = "\n".join(
+        f'    <DataSet timestep="{t:.10g}" group="" part="0" file="{name}"/>' for t, name in frames
+    )
+    return (
+        '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+        f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n"
+    )
+
+
+def _read_pvd(path: Path) -> list[tuple[float, str]]:
+    import re
+
+    if not path.exists():
+        return []
+    pattern = re.compile(r'timestep="([^"]+)".*file="([^"]+)"')
+    return [(float(m[1]), m[2]) for m in pattern.finditer(path.read_text())]
+
+
+def output_times(t_start: float, t_end: float, interval: float) -> np.ndarray:
+    """Return the output times after ``t_start`` up to and including ``t_end``."""
+    n = int(np.floor((t_end - t_start) / interval + 1e-9))
+    times = t_start + interval * np.arange(1, n + 1)
+    if not len(times) or times[-1] < t_end * (1 - 1e-12):
+        times = np.append(times, t_end)
+    return times
