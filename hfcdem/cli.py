@@ -86,6 +86,24 @@ def _mesh(args: argparse.Namespace) -> int:
     return 0
 
 
+def _overrides(items: list[str] | None) -> dict[str, object]:
+    """Parse ``KEY=VALUE`` pairs; VALUE is a TOML value, or else taken as a string."""
+    import tomllib
+
+    from hfcdem.scene import SceneError
+
+    out: dict[str, object] = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise SceneError("--set", f"expected KEY=VALUE, got {item!r}")
+        try:
+            out[key.strip()] = tomllib.loads(f"v = {value}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[key.strip()] = value.strip()
+    return out
+
+
 def _run(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
@@ -99,7 +117,7 @@ def _run(args: argparse.Namespace) -> int:
     say = _printer(comm)
 
     try:
-        scene = load_scene(args.scene, args.resolution)
+        scene = load_scene(args.scene, args.resolution, overrides=_overrides(args.set))
         summary = run_scene(scene, args.output, comm, force=args.force, say=say, resume=args.resume)
     except FieldError as exc:  # bad scene input: nothing was meshed or written
         say(f"error: {exc}", err=True)
@@ -184,6 +202,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--resume", action="store_true", help="continue a stopped run from its checkpoint"
+    )
+    run.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="replace a scene field, e.g. --set injection.duration='120 s' (repeatable)",
     )
     run.set_defaults(func=_run)
     study = sub.add_parser(

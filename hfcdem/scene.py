@@ -1413,8 +1413,12 @@ def _parse_scene(
     geometry, preset, chosen = parse_geometry(gt.data, "geometry", resolution, size)
     from hfcdem.scene_physics import PHYSICS_SECTIONS, parse_physics
 
-    physics = parse_physics(data) if any(k in data for k in PHYSICS_SECTIONS) else None
-    ignored = tuple(k for k in RESERVED_SECTIONS if k in data and k not in PHYSICS_SECTIONS)
+    # [output] alone (a geometry-only scene) does not ask for physics: it is ignored
+    wanted = any(k in data for k in PHYSICS_SECTIONS if k != "output")
+    physics = parse_physics(data) if wanted else None
+    ignored = tuple(
+        k for k in RESERVED_SECTIONS if k in data and (k not in PHYSICS_SECTIONS or not wanted)
+    )
     top.finish(extra=RESERVED_SECTIONS)
     return _build(
         "",
@@ -1430,8 +1434,39 @@ def _parse_scene(
     )
 
 
-def load_scene(path: str | Path, resolution: str | None = None, size: float | None = None) -> Scene:
-    """Read and validate the scene file ``path`` (TOML)."""
+def set_field(doc: dict[str, Any], dotted: str, value: Any) -> None:
+    """Set ``dotted`` in a scene document; a number indexes an array (``perforations.0``)."""
+    keys = dotted.split(".")
+    node: Any = doc
+    for depth, key in enumerate(keys):
+        last = depth == len(keys) - 1
+        if isinstance(node, list):
+            if not (key.isdigit() and int(key) < len(node)):
+                raise SceneError(dotted, f"{key!r}: expected an index below {len(node)}")
+            if last:
+                node[int(key)] = value
+            else:
+                node = node[int(key)]
+            continue
+        if not isinstance(node, dict):
+            raise SceneError(dotted, f"{keys[depth - 1]!r} is not a table in the scene")
+        if last:
+            node[key] = value
+        else:
+            node = node.setdefault(key, {})
+
+
+def load_scene(
+    path: str | Path,
+    resolution: str | None = None,
+    size: float | None = None,
+    overrides: Mapping[str, Any] | None = None,
+) -> Scene:
+    """Read and validate the scene file ``path`` (TOML).
+
+    ``overrides`` maps dotted keys to values that replace the file's
+    (``{"injection.duration": "120 s"}``), validated like the file.
+    """
     p = Path(path)
     try:
         with p.open("rb") as fh:
@@ -1440,6 +1475,8 @@ def load_scene(path: str | Path, resolution: str | None = None, size: float | No
         raise SceneError("", f"cannot read scene file {p}: {exc.strerror}") from None
     except tomllib.TOMLDecodeError as exc:
         raise SceneError("", f"{p} is not valid TOML: {exc}") from None
+    for key, value in (overrides or {}).items():
+        set_field(data, key, value)
     try:
         return parse_scene(data, p.stem, resolution, size, str(p))
     except FieldError as exc:

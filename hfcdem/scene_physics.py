@@ -49,6 +49,8 @@ them so a run's record can print what was assumed.  Any invalid field raises
     max_time_step = "5 s"
     break_rule = "all"
     max_breaks_per_iteration = 1
+    strength_points = "vertices" # or "midpoint": where a spring's strength is checked
+    break_tolerance = 0.01      # a step may overshoot the next break by this fraction
 """
 
 from __future__ import annotations
@@ -80,6 +82,8 @@ class SolverSettings:
     max_time_step: float = 5.0
     break_rule: str = "all"
     max_breaks_per_iteration: int | None = None
+    strength_points: str = "vertices"
+    break_tolerance: float = 0.01
 
 
 @dataclass(frozen=True)
@@ -233,6 +237,15 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             if so.has("max_breaks_per_iteration")
             else None
         ),
+        strength_points=get(
+            so, "strength_points", "string", "vertices", choices=("vertices", "midpoint")
+        ),
+        break_tolerance=get(so, "break_tolerance", "number", 0.01),
+    )
+    check(
+        0.0 < solver.break_tolerance <= 1.0,
+        "solver.break_tolerance",
+        f"expected a fraction in (0, 1], got {solver.break_tolerance!r}",
     )
     check(solver.degree in (1, 2), "solver.degree", f"expected 1 or 2, got {solver.degree!r}")
     for key in ("time_step", "max_time_step"):

@@ -35,6 +35,7 @@ from mpi4py import MPI
 
 from hfcdem.output import prepare_output_dir
 from hfcdem.scene import Scene, SceneError, parse_scene
+from hfcdem.scene import set_field as _set
 from hfcdem.units import UNITS, FieldError, parse_quantity
 
 
@@ -72,28 +73,6 @@ class Study:
             raise SceneError(
                 f"case {k} ({self.parameter} = {self.values[k]!r}): {exc.path}", exc.reason
             ) from None
-
-
-def _set(doc: dict[str, Any], dotted: str, value: Any) -> None:
-    """Set ``dotted`` in ``doc``; a number indexes an array of tables (``perforations.0``)."""
-    keys = dotted.split(".")
-    node: Any = doc
-    for depth, key in enumerate(keys):
-        last = depth == len(keys) - 1
-        if isinstance(node, list):
-            if not (key.isdigit() and int(key) < len(node)):
-                raise SceneError(dotted, f"{key!r}: expected an index below {len(node)}")
-            if last:
-                node[int(key)] = value
-            else:
-                node = node[int(key)]
-            continue
-        if not isinstance(node, dict):
-            raise SceneError(dotted, f"{keys[depth - 1]!r} is not a table in the scene")
-        if last:
-            node[key] = value
-        else:
-            node = node.setdefault(key, {})
 
 
 def load_study(path: str | Path) -> Study:

@@ -98,3 +98,15 @@ def test_a_cased_wellbore_leaves_only_the_tunnel_walls_pressurised():
     )
     # a borehole without tunnels is open hole whatever the setting
     assert pressurised_groups(["outer", "wellbore_wall"], "cased") == ("wellbore_wall",)
+
+
+def test_set_replaces_a_scene_field_and_is_checked_like_the_file(shared_tmp_path, capsys):
+    scene = load_scene(KGD, "coarse", overrides={"injection.duration": "2 s"})
+    assert scene.physics.duration == pytest.approx(2.0)
+    with pytest.raises(SceneError, match=r"injection\.duration"):
+        load_scene(KGD, "coarse", overrides={"injection.duration": "2 m"})
+    out = shared_tmp_path / "bad_set"
+    assert main(["run", KGD, "-o", str(out), "--set", "rock.poisson_ratio=0.5"]) == 2
+    assert "rock.poisson_ratio" in capsys.readouterr().err
+    assert main(["run", KGD, "-o", str(out), "--set", "novalue"]) == 2
+    assert not (out / "run.json").exists()

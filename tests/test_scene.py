@@ -289,7 +289,7 @@ def test_bad_input_names_the_field(geometry, top, message):
     assert message in str(err.value)
 
 
-def test_output_section_is_accepted_and_ignored_for_now():
+def test_output_section_alone_is_ignored_in_a_geometry_scene():
     s = parse_scene({"geometry": {"catalogue": "crack_plate"}, "output": {}})
     assert s.ignored_sections == ("output",)
     assert s.physics is None
