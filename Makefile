@@ -25,8 +25,8 @@ test:
 	@$(CONTAINER) run bash tests/run-suite.sh $(RANKS)
 
 demo:
-	@$(CONTAINER) run mpirun -n $(RANKS) python3 demos/borehole_breakdown.py -o results/borehole_breakdown
-	@echo "results: results/borehole_breakdown/ (summary.json, fracture.png, sigma_yy.png; fields.bp and interfaces.vtu for ParaView)"
+	@$(CONTAINER) run mpirun -n $(RANKS) python3 demos/perforation_no2.py -o results/perforation_no2
+	@echo "results: results/perforation_no2/ (pressure.png, fracture.png, summary.json; fields.bp and interfaces.pvd for ParaView)"
 
 # CMD reaches the shell through the environment, unexpanded by make, so quoting
 # and $variables in it survive

@@ -260,12 +260,15 @@ def run_scene(
         "peak_pressure_MPa": max(pressures) / 1e6 if pressures else None,
         "first_crack_time_s": frac.first_break_time,
         "initial_failures": frac.initial_failures,
+        "first_crack": _first_crack(scene, frac),
         "fracture_degree": solid.fracture_degree(),
         "tensile_failures": counts["tensile"],
         "shear_failures": counts["shear"],
         "simulated_time_s": frac.t,
         "steps": len(frac.history),
         "rebuilds": frac.rebuilds,
+        "rebuild_seconds": getattr(frac, "rebuild_seconds", 0.0),
+        "peak_memory_MB": _peak_memory_mb(comm),
         "max_mass_error": max((r.mass_error for r in frac.history), default=0.0),
         "cells": cells,
         "unknowns": dofs,
@@ -306,6 +309,39 @@ def _picture_fracture(path: Path, scene: Scene, frac: HydraulicFracture) -> None
     wellbore = getattr(scene.geometry, "wellbore", None)
     axis = "xyz".index(wellbore.axis) if wellbore is not None else 2
     render_fracture_pattern(path, points, states, walls, title, axis, solid.comm)
+
+
+def _peak_memory_mb(comm: MPI.Comm) -> float:
+    """Peak resident memory of all ranks together (MB), from getrusage."""
+    import resource
+
+    kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # kB on Linux
+    return float(comm.allreduce(kb, op=MPI.SUM)) / 1024.0
+
+
+def _first_crack(scene: Scene, frac: HydraulicFracture) -> dict[str, Any] | None:
+    """Where the injection's first interfaces broke (their mean midpoint).
+
+    ``distance_from_wellbore_wall_m``: from the wellbore wall, measured across the
+    wellbore axis (0 at a perforation root); None without a wellbore.
+    """
+    t = frac.first_break_time
+    solid = frac.solid
+    local = [e.midpoints for e in solid.events if t is not None and e.load_factor == t]
+    pts = np.concatenate(local) if local else np.zeros((0, solid.gdim))
+    total = solid.comm.allreduce(pts.sum(axis=0) if len(pts) else np.zeros(solid.gdim))
+    count = solid.comm.allreduce(len(pts))
+    if count == 0:
+        return None
+    point = np.zeros(3)
+    point[: solid.gdim] = np.asarray(total)[: solid.gdim] / count
+    out: dict[str, Any] = {"point_m": point.tolist(), "interfaces": count}
+    wellbore = getattr(scene.geometry, "wellbore", None)
+    if wellbore is not None:
+        across = point.copy()
+        across["xyz".index(wellbore.axis)] = 0.0
+        out["distance_from_wellbore_wall_m"] = float(np.linalg.norm(across) - wellbore.radius)
+    return out
 
 
 def _jsonable(value: Any) -> Any:

@@ -24,6 +24,7 @@ degree against the swept value).
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import tomllib
 from collections.abc import Callable, Mapping
@@ -51,6 +52,22 @@ class Study:
     fixed: Mapping[str, Any]
     resolution: str | None = None
 
+    def with_values(self, values: tuple[Any, ...]) -> Study:
+        """Return the study with other swept values (validated)."""
+        if not values:
+            raise SceneError("sweep.values", "expected a non-empty list")
+        study = dataclasses.replace(self, values=tuple(values))
+        for k in range(len(study.values)):
+            study.case_scene(k)
+        return study
+
+    def with_fixed(self, extra: Mapping[str, Any]) -> Study:
+        """Return the study with more fields fixed in every case (validated)."""
+        study = dataclasses.replace(self, fixed={**self.fixed, **extra})
+        for k in range(len(study.values)):
+            study.case_scene(k)
+        return study
+
     def case_document(self, k: int) -> dict[str, Any]:
         """Return the scene document of case ``k`` (overrides applied)."""
         doc = copy.deepcopy(dict(self.base))
@@ -75,8 +92,11 @@ class Study:
             ) from None
 
 
-def load_study(path: str | Path) -> Study:
-    """Read and validate a study file; every case's scene is checked before anything runs."""
+def load_study(path: str | Path, resolution: str | None = None) -> Study:
+    """Read and validate a study file; every case's scene is checked before anything runs.
+
+    ``resolution`` replaces the file's mesh resolution.
+    """
     p = Path(path)
     try:
         data = tomllib.loads(p.read_text())
@@ -112,11 +132,20 @@ def load_study(path: str | Path) -> Study:
         parameter=parameter,
         values=tuple(values),
         fixed=fixed,
-        resolution=data.get("resolution"),
+        resolution=resolution or data.get("resolution"),
     )
     for k in range(len(values)):
         study.case_scene(k)  # bad input stops here, before any meshing
     return study
+
+
+def breakdown_text(summary: Mapping[str, Any]) -> str:
+    """Describe a run's breakdown: "64.50 MPa", or the peak when none was found."""
+    bd = summary.get("breakdown_pressure_MPa")
+    if bd:
+        return f"{bd:.2f} MPa"
+    peak = summary.get("peak_pressure_MPa")
+    return "not reached" + (f" (peak {peak:.2f} MPa)" if peak else "")
 
 
 def numeric(value: Any) -> float | None:

@@ -55,3 +55,28 @@ def test_kgd_demo_matches_the_self_similar_solution(shared_tmp_path):
         assert (out / name).stat().st_size > 0, name
     header = (out / "history.csv").read_text().splitlines()[0].split(",")
     assert {"time", "injection_pressure", "injected_volume", "fracture_volume"} <= set(header)
+
+
+def test_perforation_no2_demo_runs_the_scene_and_names_its_files(shared_tmp_path, capsys):
+    out = shared_tmp_path / "no2"
+    summary = load("perforation_no2").main(["-o", str(out), "--duration", "1 s"])
+    assert summary["scene"] == "perforation_no2"
+    assert summary["simulated_time_s"] == pytest.approx(1.0)
+    assert summary["stopped"] is None
+    assert summary["initial_failures"] >= 0
+    for name in ("summary.json", "history.csv", "pressure.png", "fracture.png", "interfaces.pvd"):
+        assert (out / name).stat().st_size > 0, name
+    assert (out / "fields.bp").is_dir()
+    printed = capsys.readouterr().out
+    assert "paper 64.01 MPa" in printed
+    assert "fracture.png" in printed
+
+
+def test_shape_study_demo_sweeps_profiles_and_checks_orderings(shared_tmp_path, capsys):
+    out = shared_tmp_path / "shapes"
+    rows = load("shape_study").main(["-o", str(out), "--models", "no2,1-2", "--duration", "0.5 s"])
+    assert [r["value"] for r in rows] == ["no2", "1-2"]
+    lines = (out / "results.csv").read_text().splitlines()
+    assert lines[1].startswith("no2,0,") and lines[2].startswith("1-2,1,")
+    printed = capsys.readouterr().out
+    assert "paper 64.01 MPa" in printed and "paper 53.86 MPa" in printed
