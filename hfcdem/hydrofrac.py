@@ -73,6 +73,9 @@ class FlowSettings:
     edge (a vertex in 2D) hold fluid at the cavity pressure, so they break on
     effective stress (p - sigma_n >= T0); the paper's CDEM lets fluid into its
     wall joints through their initial opening.
+    ``rigid_cavity``: the stored cavity volume ignores the wall motion (the
+    pressure still loads the wall): the paper's CDEM stores fluid only in its
+    joints, so its pressurisation rate is Kw Q / V alone.
     """
 
     cavity: tuple[str, ...] = ()
@@ -84,6 +87,7 @@ class FlowSettings:
     initial_pressure: float = 0.0
     breaks_need_fluid: bool = True
     wet_wall_joints: bool = False
+    rigid_cavity: bool = False
     leak_off: CarterLeakOff | None = None
     dt_initial: float = 0.01
     dt_min: float = 1e-9
@@ -437,7 +441,8 @@ class HydraulicFracture:
         h = np.zeros((self.net.size, m))
         hc = np.zeros(m)
         wall = 0.0  # c.u of the base state: the cavity's change from the undeformed mesh
-        cvec = dolfinx.fem.petsc.assemble_vector(self._cav_form) if self._cav_form else None
+        track = self._cav_form is not None and not self.settings.rigid_cavity
+        cvec = dolfinx.fem.petsc.assemble_vector(self._cav_form) if track else None
         if cvec is not None:
             cvec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
             wall = cvec.dot(base.x.petsc_vec)

@@ -145,6 +145,7 @@ def build_fracture(scene: Scene, solid: CDEMSolid) -> HydraulicFracture:
         dt_max=phys.solver.max_time_step,
         max_breaks_per_iteration=phys.solver.max_breaks_per_iteration,
         wet_wall_joints=phys.wall_joints == "wet",
+        rigid_cavity=phys.rigid_cavity,
         break_tolerance=phys.solver.break_tolerance,
     )
     return HydraulicFracture(solid, phys.fluid, phys.injection, settings)

@@ -36,6 +36,7 @@ them so a run's record can print what was assumed.  Any invalid field raises
     wellbore = "cased"          # or "open": does the pressure load the wellbore wall too?
     wall_film = "5 um"          # fluid storage = film thickness x pressurised wall area
     wall_joints = "wet"         # or "dry": fluid in the intact joints along the wall
+    rigid_cavity = false        # true: the stored volume ignores the wall motion
 
     [output]
     interval = "5 s"            # fields over time (default: 20 frames per run)
@@ -102,6 +103,7 @@ class Physics:
     wellbore: str = "cased"
     wall_film: float | None = None
     wall_joints: str = "dry"
+    rigid_cavity: bool = False
     output_interval: float | None = None  # None: duration / 20
     pictures: bool = True
     defaulted: tuple[str, ...] = field(default=())
@@ -204,6 +206,8 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
     wellbore = get(inj, "wellbore", "string", "cased", choices=("cased", "open"))
     film = inj.quantity("wall_film", "length") if inj.has("wall_film") else None
     joints = get(inj, "wall_joints", "string", "dry", choices=("dry", "wet"))
+    rigid = inj.raw("rigid_cavity") if inj.has("rigid_cavity") else False
+    check(isinstance(rigid, bool), "injection.rigid_cavity", f"expected true or false: {rigid!r}")
     check(
         film is None or 0.0 < film <= 1e-2,
         "injection.wall_film",
@@ -279,6 +283,7 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             wellbore=wellbore,
             wall_film=film,
             wall_joints=joints,
+            rigid_cavity=rigid,
             output_interval=interval,
             pictures=pictures,
             defaulted=tuple(defaulted),

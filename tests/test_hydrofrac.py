@@ -142,6 +142,7 @@ def _borehole(
     fidelity: str = "uniform",
     wet: bool = False,
     size: float = A / 10,
+    rigid: bool = False,
     **fluid,
 ):
     solid = CDEMSolid(
@@ -166,6 +167,7 @@ def _borehole(
             # one break per coupled solve keeps Newton in its basin through the cascade
             max_breaks_per_iteration=1 if fidelity == "viscous" else None,
             wet_wall_joints=wet,
+            rigid_cavity=rigid,
         ),
     )
 
@@ -237,6 +239,21 @@ def test_wet_wall_joints_break_on_effective_stress():
     coarse = _first_break_pressure(12e6, True)
     assert abs(coarse / 10.5e6 - 1) > abs(low / 10.5e6 - 1)  # converges with h
     assert coarse < 0.8 * _first_break_pressure(12e6, False)  # dry joints hold longer
+
+
+def test_a_rigid_cavity_pressurises_at_kw_q_over_v():
+    """Fluid stored only in the cavity volume V: content V (1 + p/Kw) = V + Q t."""
+    hf = _borehole(12e6, rigid=True, bulk_modulus=1e9)
+    v = hf.cavity_volume
+    for _ in range(4):
+        rec = hf.step()
+        assert rec.tensile + rec.shear == 0
+        assert rec.injection_pressure == pytest.approx(1e9 * 2e-6 * rec.time / v, rel=1e-9)
+    # the elastic wall takes some of the fluid: 2 pi a^2 (1 + nu) / E is 13 % of V / Kw
+    elastic = _borehole(12e6, bulk_modulus=1e9)
+    elastic.step()
+    ratio = elastic.history[0].injection_pressure / hf.history[0].injection_pressure
+    assert 0.80 < ratio < 0.97
 
 
 def test_borehole_higher_rate_or_viscosity_does_not_lower_the_peak():
