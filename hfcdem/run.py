@@ -260,6 +260,7 @@ def run_scene(
         "breakdown_time_s": found.time if found else None,
         "peak_pressure_MPa": max(pressures) / 1e6 if pressures else None,
         "first_crack_time_s": frac.first_break_time,
+        "first_crack_pressure_MPa": _first_crack_pressure(frac),
         "initial_failures": frac.initial_failures,
         "first_crack": _first_crack(scene, frac),
         "fracture_degree": solid.fracture_degree(),
@@ -310,6 +311,15 @@ def _picture_fracture(path: Path, scene: Scene, frac: HydraulicFracture) -> None
     wellbore = getattr(scene.geometry, "wellbore", None)
     axis = "xyz".index(wellbore.axis) if wellbore is not None else 2
     render_fracture_pattern(path, points, states, walls, title, axis, solid.comm)
+
+
+def _first_crack_pressure(frac: HydraulicFracture) -> float | None:
+    """Injection pressure of the state located on the first crack (MPa)."""
+    t = frac.first_break_time
+    before = [r.injection_pressure for r in frac.history if t is not None and r.time < t]
+    if t is None:
+        return None
+    return max([*before, frac.settings.initial_pressure]) / 1e6
 
 
 def _peak_memory_mb(comm: MPI.Comm) -> float:

@@ -227,6 +227,8 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
         "x",
         "breakdown_pressure_MPa",
         "peak_pressure_MPa",
+        "first_crack_pressure_MPa",
+        "first_crack_time_s",
         "fracture_degree",
         "tensile_failures",
         "shear_failures",
@@ -255,6 +257,8 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
     pk = [num(r.get("peak_pressure_MPa")) for r in rows]
     a1.plot(xs, pk, "s--", label="peak pressure")
     a1.plot(xs, bd, "o-", label="breakdown pressure")
+    fc = [num(r.get("first_crack_pressure_MPa")) for r in rows]
+    a1.plot(xs, fc, "^:", label="first crack")
     a1.set_ylabel("pressure (MPa)")
     a2.plot(xs, [num(r.get("fracture_degree")) for r in rows], "o-")
     a2.set_ylabel("fracture degree")

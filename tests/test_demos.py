@@ -80,3 +80,14 @@ def test_shape_study_demo_sweeps_profiles_and_checks_orderings(shared_tmp_path, 
     assert lines[1].startswith("no2,0,") and lines[2].startswith("1-2,1,")
     printed = capsys.readouterr().out
     assert "paper 64.01 MPa" in printed and "paper 53.86 MPa" in printed
+
+
+def test_sneddon_demo_matches_eq_21_on_a_wide_plate(shared_tmp_path, capsys):
+    out = shared_tmp_path / "sneddon"
+    summary = load("sneddon_plate").main(
+        ["-o", str(out), "--half-width", "5", "--alpha", "1000", "--size", "0.01"]
+    )
+    assert abs(summary["centre_relative_error"]) < 0.02
+    assert summary["max_relative_error_inner"] < 0.05
+    assert len((out / "sneddon.csv").read_text().splitlines()) == 12
+    assert "eq. (21)" in capsys.readouterr().out
