@@ -279,6 +279,7 @@ def run_scene(
         "stopped": stopped,
         "versions": versions(comm),
         "defaults_used": list(phys.defaulted),
+        "resolved_scene": _resolved_scene(scene),
     }
     write_json(out / "summary.json", summary, comm)
     if comm.rank == 0 and pressures:
@@ -355,14 +356,34 @@ def _first_crack(scene: Scene, frac: HydraulicFracture) -> dict[str, Any] | None
     return out
 
 
+def _resolved_scene(scene: Scene) -> dict[str, Any]:
+    """Return the scene as run, every default filled in (SI units)."""
+    from dataclasses import is_dataclass
+
+    geometry = asdict(scene.geometry) if is_dataclass(scene.geometry) else repr(scene.geometry)
+    return {
+        "name": scene.name,
+        "source": scene.source,
+        "resolution": scene.resolution,
+        "geometry": _jsonable(geometry),
+        "physics": _jsonable(asdict(scene.physics)),
+    }
+
+
 def _jsonable(value: Any) -> Any:
     if isinstance(value, dict):
-        return {k: _jsonable(v) for k, v in value.items()}
+        return {str(k): _jsonable(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
         return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return _jsonable(value.item())
     if isinstance(value, float) and not math.isfinite(value):
         return str(value)
-    return value
+    if value is None or isinstance(value, bool | int | float | str):
+        return value
+    return repr(value)
 
 
 def _plot_pressure(path: Path, times: list[float], pressures: list[float], found: Any, name: str):

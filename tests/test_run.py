@@ -110,3 +110,17 @@ def test_set_replaces_a_scene_field_and_is_checked_like_the_file(shared_tmp_path
     assert "rock.poisson_ratio" in capsys.readouterr().err
     assert main(["run", KGD, "-o", str(out), "--set", "novalue"]) == 2
     assert not (out / "run.json").exists()
+
+
+def test_summary_holds_the_resolved_scene(shared_tmp_path):
+    out = shared_tmp_path / "resolved"
+    scene = load_scene(KGD, "coarse", overrides={"injection.duration": "1 s"})
+    summary = run_scene(scene, out, force=True)
+    on_disk = json.loads((out / "summary.json").read_text())
+    resolved = on_disk["resolved_scene"]
+    assert resolved["physics"]["duration"] == pytest.approx(1.0)
+    assert resolved["physics"]["rock"]["youngs_modulus"] == pytest.approx(25e9)
+    assert resolved["geometry"]  # every geometry field, defaults filled in
+    # zero toughness: the path breaks in the first step, from the initial 0 MPa
+    assert summary["first_crack_pressure_MPa"] == pytest.approx(0.0)
+    assert summary["first_crack_time_s"] <= 0.5
