@@ -93,9 +93,13 @@ def _read_pvd(path: Path) -> list[tuple[float, str]]:
 
 
 def output_times(t_start: float, t_end: float, interval: float) -> np.ndarray:
-    """Return the output times after ``t_start`` up to and including ``t_end``."""
-    n = int(np.floor((t_end - t_start) / interval + 1e-9))
-    times = t_start + interval * np.arange(1, n + 1)
+    """Return the output times k * interval after ``t_start``, and ``t_end``.
+
+    The grid starts at 0, so a resumed run keeps the times of an unbroken one.
+    """
+    first = int(np.floor(t_start / interval + 1e-9)) + 1
+    last = int(np.floor(t_end / interval + 1e-9))
+    times = interval * np.arange(first, last + 1, dtype=float)
     if not len(times) or times[-1] < t_end * (1 - 1e-12):
         times = np.append(times, t_end)
     return times

@@ -9,6 +9,7 @@ from hfcdem.analytic import kgd_viscosity
 from hfcdem.cli import main
 from hfcdem.run import OutputInUse, pressurised_groups, run_scene
 from hfcdem.scene import SceneError, load_scene, parse_scene
+from hfcdem.series import _read_pvd
 
 KGD = "meshes/scenes/kgd_strip.toml"
 
@@ -77,8 +78,16 @@ def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
         run_scene(scene, out, say=stop_after_four_seconds)
     kept = (out / "history.csv").read_text().splitlines()
     assert 2 < len(kept) < len((straight / "history.csv").read_text().splitlines())
+    frames_before = _read_pvd(out / "interfaces.pvd")
     summary = run_scene(scene, out, resume=True)
     assert summary["simulated_time_s"] == pytest.approx(10.0)
+    # the interface frames written before the stop are kept, the series goes on
+    frames = _read_pvd(out / "interfaces.pvd")
+    assert frames[: len(frames_before)] == frames_before
+    assert [t for t, _ in frames] == pytest.approx(
+        [t for t, _ in _read_pvd(straight / "interfaces.pvd")]
+    )
+    assert (out / "fields_resumed.bp").is_dir()
 
     def pressures(path):
         lines = (path / "history.csv").read_text().splitlines()

@@ -100,3 +100,15 @@ def test_bad_input_names_the_key(changes, key):
     with pytest.raises(SceneError) as err:
         scene(**changes)
     assert key in str(err.value)
+
+
+def test_output_section():
+    phys = scene(output__interval="5 s", output__pictures=False).physics
+    assert phys.output_interval == pytest.approx(5.0)
+    assert phys.pictures is False
+    with pytest.raises(SceneError, match=r"output\.interval"):
+        scene(output__interval="-5 s")
+    with pytest.raises(SceneError, match=r"output\.pictures"):
+        scene(output__pictures="yes")
+    with pytest.raises(SceneError, match=r"output\.colour"):
+        scene(output__colour="red")
