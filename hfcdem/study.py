@@ -148,6 +148,19 @@ def breakdown_text(summary: Mapping[str, Any]) -> str:
     return "not reached" + (f" (peak {peak:.2f} MPa)" if peak else "")
 
 
+def pick_metric(rows: list[dict[str, Any]]) -> tuple[dict[Any, float], str]:
+    """Return each case's breakdown pressure, or its first-crack pressure when a case has none.
+
+    The second item names what was used ("breakdown" or "first crack"), so a
+    comparison says which pressure it ranks.
+    """
+    bd = {r["value"]: r.get("breakdown_pressure_MPa") for r in rows}
+    if bd and all(bd.values()):
+        return {k: float(v) for k, v in bd.items()}, "breakdown"
+    fc = {r["value"]: r.get("first_crack_pressure_MPa") for r in rows}
+    return {k: float(v) for k, v in fc.items() if v}, "first crack"
+
+
 def numeric(value: Any) -> float | None:
     """Return the SI number of a swept value (a number, or a quantity with its unit)."""
     if isinstance(value, int | float) and not isinstance(value, bool):
@@ -255,7 +268,7 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
     bd = [num(r.get("breakdown_pressure_MPa")) for r in rows]
     pk = [num(r.get("peak_pressure_MPa")) for r in rows]
-    a1.plot(xs, pk, "s--", label="peak pressure")
+    a1.plot(xs, pk, "s--", label="peak pressure (highest in the run)")
     a1.plot(xs, bd, "o-", label="breakdown pressure")
     fc = [num(r.get("first_crack_pressure_MPa")) for r in rows]
     a1.plot(xs, fc, "^:", label="first crack")
