@@ -73,6 +73,10 @@ class FlowSettings:
     edge (a vertex in 2D) hold fluid at the cavity pressure, so they break on
     effective stress (p - sigma_n >= T0); the paper's CDEM lets fluid into its
     wall joints through their initial opening.
+    ``permeate_joints`` (with ``wet_wall_joints``): the fluid also stands in the
+    intact interfaces along every open crack at the cavity pressure, so it
+    permeates the joints ahead of the fracture as it grows (the paper's
+    saturation front through its joints, taken as instantaneous).
     ``rigid_cavity``: the stored cavity volume ignores the wall motion (the
     pressure still loads the wall): the paper's CDEM stores fluid only in its
     joints, so its pressurisation rate is Kw Q / V alone.
@@ -87,6 +91,7 @@ class FlowSettings:
     initial_pressure: float = 0.0
     breaks_need_fluid: bool = True
     wet_wall_joints: bool = False
+    permeate_joints: bool = False
     rigid_cavity: bool = False
     leak_off: CarterLeakOff | None = None
     dt_initial: float = 0.01
@@ -269,7 +274,12 @@ class HydraulicFracture:
         solid = self.solid
         if not (self.settings.wet_wall_joints and self.settings.cavity):
             return np.zeros(solid.num_facets, dtype=bool)
-        touching = np.isin(solid.vertex_ids, self._cavity_vertices).sum(axis=1)
+        ids = self._cavity_vertices
+        if self.settings.permeate_joints and getattr(self, "net", None) is not None:
+            feeding = (self.group == 0) & (self.is_open > 0)
+            if feeding.any():
+                ids = np.union1d(ids, self.net.keys[feeding].reshape(-1))
+        touching = np.isin(solid.vertex_ids, ids).sum(axis=1)
         return (touching >= self.gdim - 1) & ~solid.is_crack
 
     def _intact_wall_joints(self) -> np.ndarray:
@@ -395,6 +405,8 @@ class HydraulicFracture:
         self._rebuild_network()
         solid = self.solid
         self.group = self._groups()
+        if self.settings.permeate_joints:
+            self._wall_joints = self._find_wall_joints()
         m = 1 + (int(self.group.max()) if self.group.size and self.group.max() > 0 else 0)
         self.m = m
         a_form, ksp = solid.factorize()

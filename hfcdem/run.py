@@ -144,7 +144,8 @@ def build_fracture(scene: Scene, solid: CDEMSolid) -> HydraulicFracture:
         dt_initial=phys.solver.time_step,
         dt_max=phys.solver.max_time_step,
         max_breaks_per_iteration=phys.solver.max_breaks_per_iteration,
-        wet_wall_joints=phys.wall_joints == "wet",
+        wet_wall_joints=phys.wall_joints in ("wet", "permeated"),
+        permeate_joints=phys.wall_joints == "permeated",
         rigid_cavity=phys.rigid_cavity,
         break_tolerance=phys.solver.break_tolerance,
     )

@@ -35,7 +35,7 @@ them so a run's record can print what was assumed.  Any invalid field raises
     extra_volume = "0 m3"       # storage outside the model (not yet a unit: m3 as a number)
     wellbore = "cased"          # or "open": does the pressure load the wellbore wall too?
     wall_film = "5 um"          # fluid storage = film thickness x pressurised wall area
-    wall_joints = "wet"         # or "dry": fluid in the intact joints along the wall
+    wall_joints = "wet"         # "dry", "wet" (the wall's) or "permeated" (open cracks' too)
     rigid_cavity = false        # true: the stored volume ignores the wall motion
 
     [output]
@@ -205,7 +205,7 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
     # perforated wells are cased: only the tunnels are open hole
     wellbore = get(inj, "wellbore", "string", "cased", choices=("cased", "open"))
     film = inj.quantity("wall_film", "length") if inj.has("wall_film") else None
-    joints = get(inj, "wall_joints", "string", "dry", choices=("dry", "wet"))
+    joints = get(inj, "wall_joints", "string", "dry", choices=("dry", "wet", "permeated"))
     rigid = inj.raw("rigid_cavity") if inj.has("rigid_cavity") else False
     check(isinstance(rigid, bool), "injection.rigid_cavity", f"expected true or false: {rigid!r}")
     check(

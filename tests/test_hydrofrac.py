@@ -143,6 +143,7 @@ def _borehole(
     wet: bool = False,
     size: float = A / 10,
     rigid: bool = False,
+    permeate: bool = False,
     **fluid,
 ):
     solid = CDEMSolid(
@@ -168,6 +169,7 @@ def _borehole(
             max_breaks_per_iteration=1 if fidelity == "viscous" else None,
             wet_wall_joints=wet,
             rigid_cavity=rigid,
+            permeate_joints=permeate,
         ),
     )
 
@@ -239,6 +241,22 @@ def test_wet_wall_joints_break_on_effective_stress():
     coarse = _first_break_pressure(12e6, True)
     assert abs(coarse / 10.5e6 - 1) > abs(low / 10.5e6 - 1)  # converges with h
     assert coarse < 0.8 * _first_break_pressure(12e6, False)  # dry joints hold longer
+
+
+def test_permeated_joints_follow_the_open_cracks():
+    """Joints along an open crack joined to the cavity hold fluid; the crack goes further."""
+    wet = _borehole(12e6, wet=True)
+    perm = _borehole(12e6, wet=True, permeate=True)
+    for hf in (wet, perm):
+        while hf.t < 30.0:
+            hf.step()
+    # the wall joints are the same; permeation adds the joints along the new cracks
+    assert wet._wall_joints.sum() < perm._wall_joints.sum()
+    ids = np.union1d(perm._cavity_vertices, perm.net.keys[perm.is_open > 0].reshape(-1))
+    touching = np.isin(perm.solid.vertex_ids, ids).sum(axis=1) >= 1
+    assert np.all(touching[perm._wall_joints])
+    # with fluid ahead of it more of the rock breaks in tension (143 against 66 facets)
+    assert perm.history[-1].tensile > 1.5 * wet.history[-1].tensile
 
 
 def test_a_rigid_cavity_pressurises_at_kw_q_over_v():
