@@ -145,20 +145,21 @@ def breakdown_text(summary: Mapping[str, Any]) -> str:
     if bd:
         return f"{bd:.2f} MPa"
     peak = summary.get("peak_pressure_MPa")
-    return "not reached" + (f" (peak {peak:.2f} MPa)" if peak else "")
+    return "no drop confirmed" + (f" (peak {peak:.2f} MPa)" if peak else "")
 
 
 def pick_metric(rows: list[dict[str, Any]]) -> tuple[dict[Any, float], str]:
-    """Return each case's breakdown pressure, or its first-crack pressure when a case has none.
+    """Return the pressure to rank cases by, and its name.
 
-    The second item names what was used ("breakdown" or "first crack"), so a
-    comparison says which pressure it ranks.
+    The paper calls the peak injection pressure the breakdown pressure; a run
+    that cracked but whose pressure then only levels off (no confirmed drop)
+    still has that peak.  So every case that cracked is ranked by its peak
+    pressure; when one did not crack, by nothing (an empty dict).
     """
-    bd = {r["value"]: r.get("breakdown_pressure_MPa") for r in rows}
-    if bd and all(bd.values()):
-        return {k: float(v) for k, v in bd.items()}, "breakdown"
-    fc = {r["value"]: r.get("first_crack_pressure_MPa") for r in rows}
-    return {k: float(v) for k, v in fc.items() if v}, "first crack"
+    cracked = {r["value"]: r.get("peak_pressure_MPa") for r in rows if r.get("first_crack_time_s")}
+    if len(cracked) != len(rows) or not all(cracked.values()):
+        return {}, "peak pressure"
+    return {k: float(v) for k, v in cracked.items()}, "peak pressure"
 
 
 def numeric(value: Any) -> float | None:
