@@ -340,14 +340,15 @@ def _first_crack(scene: Scene, frac: HydraulicFracture) -> dict[str, Any] | None
     """
     t = frac.first_break_time
     solid = frac.solid
+    width = solid.midpoints.shape[1]  # the same on every rank (3 even in 2D)
     local = [e.midpoints for e in solid.events if t is not None and e.load_factor == t]
-    pts = np.concatenate(local) if local else np.zeros((0, solid.gdim))
-    total = solid.comm.allreduce(pts.sum(axis=0) if len(pts) else np.zeros(solid.gdim))
-    count = solid.comm.allreduce(len(pts))
+    pts = np.concatenate(local).reshape(-1, width) if local else np.zeros((0, width))
+    total = solid.comm.allreduce(pts.sum(axis=0), op=MPI.SUM)
+    count = solid.comm.allreduce(len(pts), op=MPI.SUM)
     if count == 0:
         return None
     point = np.zeros(3)
-    point[: solid.gdim] = np.asarray(total)[: solid.gdim] / count
+    point[:width] = np.asarray(total)[:width] / count
     out: dict[str, Any] = {"point_m": point.tolist(), "interfaces": count}
     wellbore = getattr(scene.geometry, "wellbore", None)
     if wellbore is not None:
