@@ -116,7 +116,7 @@ def wall_area(tmesh: Any, groups: tuple[str, ...]) -> float:
 
     if not groups:
         return 0.0
-    one = dolfinx.fem.Constant(tmesh.mesh, 1.0)
+    one = dolfinx.fem.Constant(tmesh.mesh, dolfinx.default_scalar_type(1.0))
     form = dolfinx.fem.form(sum(one * tmesh.ds(name) for name in groups))
     local = dolfinx.fem.assemble_scalar(form)
     return float(tmesh.mesh.comm.allreduce(local, op=MPI.SUM))

@@ -157,9 +157,10 @@ def pick_metric(rows: list[dict[str, Any]]) -> tuple[dict[Any, float], str]:
     pressure; when one did not crack, by nothing (an empty dict).
     """
     cracked = {r["value"]: r.get("peak_pressure_MPa") for r in rows if r.get("first_crack_time_s")}
-    if len(cracked) != len(rows) or not all(cracked.values()):
+    peaks = {k: float(v) for k, v in cracked.items() if v is not None}
+    if len(peaks) != len(rows):
         return {}, "peak pressure"
-    return {k: float(v) for k, v in cracked.items()}, "peak pressure"
+    return peaks, "peak pressure"
 
 
 def numeric(value: Any) -> float | None:
