@@ -8,6 +8,7 @@ truncated ``summary.json`` over a good one.
 from __future__ import annotations
 
 import json
+import math
 import os
 import tempfile
 from collections.abc import Iterable, Mapping, Sequence
@@ -39,17 +40,27 @@ def prepare_output_dir(path: str | os.PathLike[str], comm: MPI.Comm = MPI.COMM_W
     return out
 
 
-def _to_builtin(value: Any) -> Any:
+def _to_builtin(value: Any, strict: bool = False) -> Any:
+    """Return ``value`` as JSON-ready builtins (mappings, sequences, NumPy values, paths).
+
+    ``strict``: non-finite floats become strings and any other object its repr,
+    so the result is plain JSON whatever went in.
+    """
     if isinstance(value, Mapping):
-        return {str(k): _to_builtin(v) for k, v in value.items()}
+        return {str(k): _to_builtin(v, strict) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [_to_builtin(v) for v in value]
+        return [_to_builtin(v, strict) for v in value]
     if isinstance(value, np.ndarray):
-        return _to_builtin(value.tolist())
+        return _to_builtin(value.tolist(), strict)
     if isinstance(value, np.generic):
-        return value.item()
+        return _to_builtin(value.item(), strict)
     if isinstance(value, Path):
         return str(value)
+    if strict:
+        if isinstance(value, float) and not math.isfinite(value):
+            return str(value)
+        if not (value is None or isinstance(value, bool | int | float | str)):
+            return repr(value)
     return value
 
 

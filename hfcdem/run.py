@@ -36,7 +36,7 @@ from hfcdem.breakdown import detect_breakdown
 from hfcdem.cdem import CDEMSolid
 from hfcdem.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
 from hfcdem.info import versions
-from hfcdem.output import prepare_output_dir, write_interfaces, write_json
+from hfcdem.output import _to_builtin, prepare_output_dir, write_interfaces, write_json
 from hfcdem.scene import Scene, SceneError
 from hfcdem.series import FieldSeries, output_times
 
@@ -373,19 +373,7 @@ def _resolved_scene(scene: Scene) -> dict[str, Any]:
 
 
 def _jsonable(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
-    if isinstance(value, np.generic):
-        return _jsonable(value.item())
-    if isinstance(value, float) and not math.isfinite(value):
-        return str(value)
-    if value is None or isinstance(value, bool | int | float | str):
-        return value
-    return repr(value)
+    return _to_builtin(value, strict=True)
 
 
 def _plot_pressure(path: Path, times: list[float], pressures: list[float], found: Any, name: str):
