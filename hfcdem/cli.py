@@ -125,6 +125,14 @@ def _run(args: argparse.Namespace) -> int:
     except (OutputInUse, MeshingError) as exc:
         say(f"error: {exc}", err=True)
         return 3
+    if summary.get("kind") == "static":
+        say(
+            f"{scene.name}: crack pressure {summary['crack_pressure_MPa']:g} MPa, max opening "
+            f"{summary['max_crack_opening_m'] * 1e6:.3f} um, "
+            f"{summary['overstressed_interfaces']} springs past their strength, "
+            f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
+        )
+        return 0
     bd = summary["breakdown_pressure_MPa"]
     say(
         f"{scene.name}: breakdown "
@@ -191,7 +199,7 @@ def build_parser() -> argparse.ArgumentParser:
     run = sub.add_parser(
         "run",
         help="run a scene: inject, break, write summary.json, history.csv, pictures, fields",
-        description="Run a scene file with [rock], [stress] and [injection] sections "
+        description="Run a scene file with [rock], [stress] and [injection] (or [load]) sections "
         "(serially or under mpirun).",
     )
     run.add_argument("scene", metavar="SCENE.toml")

@@ -169,7 +169,9 @@ def run_scene(
 
     if scene.physics is None:
         raise SceneError(
-            "", "the scene states no physics: add [rock], [stress] and [injection] sections"
+            "",
+            "the scene states no physics: add [rock], [stress] and [injection] (or [load]) "
+            "sections",
         )
     say = say or (lambda msg: None)
     wall0 = time.perf_counter()
@@ -198,6 +200,24 @@ def run_scene(
     solid = build_solid(scene, tmesh)
     dofs = solid.V.dofmap.index_map.size_global * solid.gdim
     say(f"{scene.name}: {cells} cells, {dofs} unknowns, {comm.size} rank(s)")
+
+    def record() -> dict[str, Any]:
+        """Summary entries every run has: mesh, machine, versions, the scene as run."""
+        return {
+            "cells": cells,
+            "unknowns": dofs,
+            "ranks": comm.size,
+            "peak_memory_MB": _peak_memory_mb(comm),
+            "wall_time_s": time.perf_counter() - wall0,
+            "versions": versions(comm),
+            "defaults_used": list(phys.defaulted),
+            "resolved_scene": _resolved_scene(scene),
+        }
+
+    if phys.load is not None:
+        from hfcdem.static import run_static
+
+        return run_static(scene, solid, out, say, record)
     frac = build_fracture(scene, solid)
     checkpoint = out / "checkpoint.json"
     if resume:
@@ -271,16 +291,9 @@ def run_scene(
         "steps": len(frac.history),
         "rebuilds": frac.rebuilds,
         "rebuild_seconds": getattr(frac, "rebuild_seconds", 0.0),
-        "peak_memory_MB": _peak_memory_mb(comm),
         "max_mass_error": max((r.mass_error for r in frac.history), default=0.0),
-        "cells": cells,
-        "unknowns": dofs,
-        "ranks": comm.size,
-        "wall_time_s": time.perf_counter() - wall0,
         "stopped": stopped,
-        "versions": versions(comm),
-        "defaults_used": list(phys.defaulted),
-        "resolved_scene": _resolved_scene(scene),
+        **record(),
     }
     write_json(out / "summary.json", summary, comm)
     if comm.rank == 0 and pressures:

@@ -48,7 +48,7 @@ from hfcdem.units import FieldError, join_path, parse_quantity
 
 Vector = tuple[float, float, float]
 AXES = ("x", "y", "z")
-RESERVED_SECTIONS = ("rock", "stress", "fluid", "injection", "solver", "output")
+RESERVED_SECTIONS = ("rock", "stress", "fluid", "injection", "load", "solver", "output")
 MAX_CELLS = 2.0e7  # estimated cell counts above this are refused as absurd
 
 MM = 1e-3

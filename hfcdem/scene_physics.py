@@ -1,4 +1,4 @@
-"""The physics sections of a scene file: rock, stress, fluid, injection, solver.
+"""The physics sections of a scene file: rock, stress, fluid, injection or load, solver.
 
 Every dimensional value carries its unit (``"21.5 GPa"``, ``"1e-7 m3/s"``);
 fields left out take the defaults below, and :attr:`Physics.defaulted` lists
@@ -38,6 +38,10 @@ them so a run's record can print what was assumed.  Any invalid field raises
     wall_joints = "wet"         # "dry", "wet" (the wall's) or "permeated" (open cracks' too)
     rigid_cavity = false        # true: the stored volume ignores the wall motion
 
+    [load]                      # instead of [injection]: one static solve
+    crack_pressure = "22 MPa"   # on the faces of the pre-existing crack (tag 'crack');
+                                # the springs stay elastic (hfcdem.static)
+
     [output]
     interval = "5 s"            # fields over time (default: 20 frames per run)
     pictures = true             # PNG pictures of the fracture pattern (PyVista)
@@ -65,7 +69,7 @@ from hfcdem.fluid import Fluid, Injection
 from hfcdem.interfaces import InterfaceModel
 from hfcdem.solid import ElasticMaterial, InSituStress
 
-PHYSICS_SECTIONS = ("rock", "stress", "fluid", "injection", "solver", "output")
+PHYSICS_SECTIONS = ("rock", "stress", "fluid", "injection", "load", "solver", "output")
 
 # in-situ stresses below this are almost surely MPa values typed with "Pa"
 _SMALLEST_STRESS = 1e3  # Pa
@@ -88,14 +92,31 @@ class SolverSettings:
 
 
 @dataclass(frozen=True)
+class StaticLoad:
+    """A pressure held on the pre-existing crack faces, solved once, elastic (no flow)."""
+
+    crack_pressure: float
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.crack_pressure) and abs(self.crack_pressure) <= 1e9):
+            raise ValueError(
+                f"load.crack_pressure: expected -1 GPa to 1 GPa, got {self.crack_pressure!r} Pa"
+            )
+
+
+@dataclass(frozen=True)
 class Physics:
-    """Everything a coupled run needs besides the mesh, complete when constructed."""
+    """Everything a run needs besides the mesh, complete when constructed.
+
+    A coupled run has ``injection`` (and ``load`` None); a static run has
+    ``load`` (and ``injection`` None, ``duration`` 0).
+    """
 
     rock: ElasticMaterial
     interfaces: InterfaceModel
     stress: InSituStress
     fluid: Fluid
-    injection: Injection
+    injection: Injection | None
     duration: float
     initial_pressure: float
     extra_volume: float
@@ -106,7 +127,12 @@ class Physics:
     rigid_cavity: bool = False
     output_interval: float | None = None  # None: duration / 20
     pictures: bool = True
+    load: StaticLoad | None = None
     defaulted: tuple[str, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        if (self.injection is None) == (self.load is None):
+            raise ValueError("a scene has exactly one of [injection] and [load]")
 
 
 def parse_physics(data: Mapping[str, Any]) -> Physics:
@@ -168,52 +194,77 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
     }
     fl.finish()
 
-    inj = section("injection")
-    given = [k for k in ("rate", "rate_schedule", "pressure_schedule") if inj.has(k)]
-    check(
-        len(given) == 1,
-        "injection",
-        "give exactly one of rate, rate_schedule, pressure_schedule"
-        + (f" (got {', '.join(given)})" if given else ""),
-    )
-    if given[0] == "rate":
-        injection = Injection.constant_rate(inj.quantity("rate", "flow_rate"))
+    static = "load" in data
+    if static and "injection" in data:
+        raise SceneError(
+            "load", "give [injection] (a coupled run) or [load] (one static solve), not both"
+        )
+    if static:
+        ld = section("load")
+        pressure = ld.quantity("crack_pressure", "stress")
+        check(
+            abs(pressure) <= _LARGEST_STRESS,
+            "load.crack_pressure",
+            f"expected -1 GPa to 1 GPa, got {pressure:g} Pa",
+        )
+        ld.finish()
+        load: StaticLoad | None = StaticLoad(pressure)
+        injection, duration, p0, extra, wellbore = None, 0.0, 0.0, 0.0, "cased"
+        film, joints, rigid = None, "dry", False
     else:
-        points = inj.raw(given[0])
-        dim = "flow_rate" if given[0] == "rate_schedule" else "stress"
-        from hfcdem.units import parse_quantity
+        load = None
+        inj = section("injection")
+        given = [k for k in ("rate", "rate_schedule", "pressure_schedule") if inj.has(k)]
+        check(
+            len(given) == 1,
+            "injection",
+            "give exactly one of rate, rate_schedule, pressure_schedule"
+            + (f" (got {', '.join(given)})" if given else ""),
+        )
+        if given[0] == "rate":
+            injection = Injection.constant_rate(inj.quantity("rate", "flow_rate"))
+        else:
+            points = inj.raw(given[0])
+            dim = "flow_rate" if given[0] == "rate_schedule" else "stress"
+            from hfcdem.units import parse_quantity
 
-        check(isinstance(points, list) and len(points) > 0, inj.sub(given[0]), "expected a list")
-        pairs = []
-        for i, pt in enumerate(points):
-            path = f"{inj.sub(given[0])}[{i}]"
-            check(isinstance(pt, list) and len(pt) == 2, path, "expected [time, value]")
-            pairs.append((parse_quantity(pt[0], "time", path), parse_quantity(pt[1], dim, path)))
-        try:
-            injection = (
-                Injection.rate_schedule(pairs)
-                if given[0] == "rate_schedule"
-                else Injection.pressure_schedule(pairs)
+            check(
+                isinstance(points, list) and len(points) > 0, inj.sub(given[0]), "expected a list"
             )
-        except ValueError as exc:
-            raise SceneError(inj.sub(given[0]), str(exc)) from None
-    duration = inj.quantity("duration", "time")
-    check(duration > 0.0, "injection.duration", f"must be positive, got {duration:g} s")
-    p0 = get(inj, "initial_pressure", "stress", 0.0)
-    extra = get(inj, "extra_volume", "number", 0.0)
-    check(extra >= 0.0, "injection.extra_volume", f"must be >= 0 m3, got {extra!r}")
-    # perforated wells are cased: only the tunnels are open hole
-    wellbore = get(inj, "wellbore", "string", "cased", choices=("cased", "open"))
-    film = inj.quantity("wall_film", "length") if inj.has("wall_film") else None
-    joints = get(inj, "wall_joints", "string", "dry", choices=("dry", "wet", "permeated"))
-    rigid = inj.raw("rigid_cavity") if inj.has("rigid_cavity") else False
-    check(isinstance(rigid, bool), "injection.rigid_cavity", f"expected true or false: {rigid!r}")
-    check(
-        film is None or 0.0 < film <= 1e-2,
-        "injection.wall_film",
-        f"expected a thickness in (0, 10 mm], got {film!r} m",
-    )
-    inj.finish()
+            pairs = []
+            for i, pt in enumerate(points):
+                path = f"{inj.sub(given[0])}[{i}]"
+                check(isinstance(pt, list) and len(pt) == 2, path, "expected [time, value]")
+                pairs.append(
+                    (parse_quantity(pt[0], "time", path), parse_quantity(pt[1], dim, path))
+                )
+            try:
+                injection = (
+                    Injection.rate_schedule(pairs)
+                    if given[0] == "rate_schedule"
+                    else Injection.pressure_schedule(pairs)
+                )
+            except ValueError as exc:
+                raise SceneError(inj.sub(given[0]), str(exc)) from None
+        duration = inj.quantity("duration", "time")
+        check(duration > 0.0, "injection.duration", f"must be positive, got {duration:g} s")
+        p0 = get(inj, "initial_pressure", "stress", 0.0)
+        extra = get(inj, "extra_volume", "number", 0.0)
+        check(extra >= 0.0, "injection.extra_volume", f"must be >= 0 m3, got {extra!r}")
+        # perforated wells are cased: only the tunnels are open hole
+        wellbore = get(inj, "wellbore", "string", "cased", choices=("cased", "open"))
+        film = inj.quantity("wall_film", "length") if inj.has("wall_film") else None
+        joints = get(inj, "wall_joints", "string", "dry", choices=("dry", "wet", "permeated"))
+        rigid = inj.raw("rigid_cavity") if inj.has("rigid_cavity") else False
+        check(
+            isinstance(rigid, bool), "injection.rigid_cavity", f"expected true or false: {rigid!r}"
+        )
+        check(
+            film is None or 0.0 < film <= 1e-2,
+            "injection.wall_film",
+            f"expected a thickness in (0, 10 mm], got {film!r} m",
+        )
+        inj.finish()
 
     out = section("output")
     interval = out.quantity("interval", "time") if out.has("interval") else None
@@ -286,6 +337,7 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             rigid_cavity=rigid,
             output_interval=interval,
             pictures=pictures,
+            load=load,
             defaulted=tuple(defaulted),
         )
     except ValueError as exc:  # a range the dataclasses check themselves

@@ -1,0 +1,216 @@
+"""Run a static scene: one solve of the CDEM solid under a pressure held in its crack.
+
+A scene with a ``[load]`` section instead of ``[injection]`` (see
+:mod:`hfcdem.scene_physics`) is solved once: no fluid flows, the pressure acts
+on both faces of the pre-existing crack (tag ``crack``) and the in-situ stress
+acts everywhere.  The springs hold whatever the load, which is what a
+comparison with an elastic solution needs; the summary counts the springs
+loaded past their strength.  (Letting them break under a held pressure is an
+unstable crack: it runs to the boundary.  Growth is what an injection scene is
+for.)
+
+For a ``crack_plate`` scene the crack-face displacement is compared with
+Sneddon's infinite-plate solution (the paper's eq. 21) at the paper's 11
+monitoring points.
+
+Written into DIR: ``summary.json``, ``crack_opening.csv`` and
+``crack_opening.png`` (opening along the crack), ``fields.bp`` (displacement,
+normal stresses) and ``interfaces.pvd`` (state, opening, normal traction and
+failure ratio per interface) for ParaView.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+from hfcdem import analytic
+from hfcdem.cdem import CDEMSolid, Loads
+from hfcdem.interfaces import FacetState
+from hfcdem.output import write_csv, write_json
+from hfcdem.sampling import evaluate_at_points
+from hfcdem.scene import Scene
+from hfcdem.series import FieldSeries
+
+MONITORING_POINTS = 11  # along the crack, tips included (the paper's Fig. 6)
+
+
+class StaticState:
+    """The solved solid under one load, in the shape :class:`FieldSeries` writes."""
+
+    def __init__(self, solid: CDEMSolid, loads: Loads) -> None:
+        self.solid, self.loads = solid, loads
+
+    def current_loads(self) -> Loads:
+        """Return the loads of the solid's displacement."""
+        return self.loads
+
+    def interface_fields(self, loads: Loads) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Vertex coordinates (F, nv, 3) and per-facet data of the owned interfaces."""
+        solid = self.solid
+        snap = solid.snapshot(loads)
+        ratio, _ = solid.overstress(loads)
+        own = solid.owned
+        data = {
+            "state": solid.state[own].astype(float),
+            "opening_m": snap.opening[own],
+            "normal_traction_MPa": snap.normal_traction[own] / 1e6,
+            "failure_ratio": ratio[own],
+        }
+        return solid.vertex_coords[own], data
+
+
+def crack_face_displacement(solid: CDEMSolid, x: np.ndarray, axis: int = 1) -> np.ndarray:
+    """Half the jump of displacement component ``axis`` across the crack line y = 0 at ``x``.
+
+    Points on the crack are probed just above and below it, so each side's
+    block is evaluated; the result is the same on every rank.
+    """
+    eps = 1e-10
+    up = np.column_stack([x, np.full_like(x, eps)])
+    down = np.column_stack([x, np.full_like(x, -eps)])
+    return 0.5 * (
+        evaluate_at_points(solid.u, up)[:, axis] - evaluate_at_points(solid.u, down)[:, axis]
+    )
+
+
+def compare_sneddon(
+    solid: CDEMSolid, half_length: float, pressure: float, symmetric: bool
+) -> dict[str, Any]:
+    """Crack-face u_y at the paper's 11 monitoring points next to Sneddon's eq. (21).
+
+    ``symmetric``: the mesh is the half x >= 0, so points at x < 0 are read at -x.
+    """
+    material = solid.material
+    x = np.linspace(-half_length, half_length, MONITORING_POINTS)
+    probe = np.abs(x) if symmetric else x.copy()
+    # the tips themselves are on the crack's end vertices: step just inside
+    probe = np.clip(probe, -half_length * (1 - 1e-9), half_length * (1 - 1e-9))
+    ours = crack_face_displacement(solid, probe)
+    exact = 0.5 * analytic.sneddon_opening(
+        x, half_length, pressure, material.youngs_modulus, material.poisson_ratio
+    )
+    centre = MONITORING_POINTS // 2
+    inner = slice(1, -1)  # the tips have zero opening: no relative error there
+    return {
+        "points": np.column_stack([x, ours, exact]).tolist(),  # x, u_y, Sneddon's u_y (m)
+        "centre_uy_um": float(ours[centre] * 1e6),
+        "sneddon_centre_uy_um": float(exact[centre] * 1e6),
+        "centre_relative_error": float(ours[centre] / exact[centre] - 1.0),
+        "max_relative_error_inner": float(np.max(np.abs(ours[inner] / exact[inner] - 1.0))),
+    }
+
+
+def run_static(
+    scene: Scene,
+    solid: CDEMSolid,
+    out: Path,
+    say: Callable[[str], None],
+    record: Callable[[], dict[str, Any]],
+) -> dict[str, Any]:
+    """Solve ``scene`` (which has a ``[load]``) once and write its results; return the summary.
+
+    ``record``: the run's common summary entries (cells, versions, wall time, ...).
+    """
+    comm = solid.comm
+    load = scene.physics.load
+    loads = Loads(crack_pressure=load.crack_pressure)
+    if not comm.allreduce(int(np.count_nonzero(solid.is_crack & solid.owned)), op=MPI.SUM):
+        from hfcdem.scene import SceneError
+
+        raise SceneError("load.crack_pressure", "the scene has no pre-existing crack (tag 'crack')")
+    t0 = time.perf_counter()
+    solid.solve(loads)
+    say(f"solved ({time.perf_counter() - t0:.1f} s)")
+    ratio, _ = solid.overstress(loads)
+    overstressed = int(comm.allreduce(int(np.count_nonzero(ratio > 1.0)), op=MPI.SUM))
+    # opening of every crack facet at its midpoint, gathered on rank 0 along x
+    snap = solid.snapshot(loads)
+    springs = (solid.state == FacetState.INTACT) & solid.owned
+    tension = snap.normal_traction[springs].max(initial=-np.inf)
+    worst = float(comm.allreduce(float(tension), op=MPI.MAX))
+    if overstressed:
+        say(
+            f"{overstressed} springs are past their strength (largest tension "
+            f"{worst / 1e6:.3g} MPa): held elastic here, the crack would grow"
+        )
+    mine = solid.is_crack & solid.owned
+    rows = np.column_stack([solid.midpoints[mine][:, 0], snap.opening[mine]])
+    gathered = comm.gather(rows, root=0)
+    profile = np.concatenate(gathered) if comm.rank == 0 else np.zeros((0, 2))
+    profile = profile[np.argsort(profile[:, 0])] if len(profile) else profile
+    max_opening = float(comm.allreduce(float(snap.opening[mine].max(initial=0.0)), op=MPI.MAX))
+
+    summary: dict[str, Any] = {
+        "scene": scene.name,
+        "kind": "static",
+        "crack_pressure_MPa": load.crack_pressure / 1e6,
+        "max_crack_opening_m": max_opening,
+        "overstressed_interfaces": overstressed,
+        "max_spring_tension_MPa": worst / 1e6 if np.isfinite(worst) else None,
+    }
+    reference = None
+    if scene.geometry.kind == "crack_plate":
+        reference = compare_sneddon(
+            solid,
+            0.5 * scene.geometry.crack.length,
+            load.crack_pressure,
+            "x" in scene.geometry.symmetry,
+        )
+        for xi, ours, ref in reference["points"]:
+            gap = f"{ours / ref - 1:+.2%}" if ref > 0 else "(tip)"
+            say(f"x {xi:+.4f} m: u_y {ours * 1e6:8.3f} um, eq. (21) {ref * 1e6:8.3f} um {gap}")
+        r = reference
+        say(
+            f"centre: u_y {r['centre_uy_um']:.3f} um, Sneddon "
+            f"{r['sneddon_centre_uy_um']:.3f} um ({r['centre_relative_error']:+.2%})"
+        )
+        summary["sneddon"] = reference
+    summary |= record()
+    write_json(out / "summary.json", summary, comm)
+    write_csv(out / "crack_opening.csv", ["x_m", "opening_m"], profile.tolist(), comm)
+    series = FieldSeries(out, StaticState(solid, loads))
+    series.write(0.0)
+    series.close()
+    if comm.rank == 0:
+        _plot_opening(out / "crack_opening.png", profile, reference, scene)
+    comm.barrier()
+    return summary
+
+
+def _plot_opening(
+    path: Path, profile: np.ndarray, reference: dict[str, Any] | None, scene: Scene
+) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.5, 4))
+    if reference is not None:
+        a = 0.5 * scene.geometry.crack.length
+        fine = np.linspace(-a, a, 201)
+        rock = scene.physics.rock
+        exact = 0.5 * analytic.sneddon_opening(
+            fine, a, scene.physics.load.crack_pressure, rock.youngs_modulus, rock.poisson_ratio
+        )
+        ax.plot(fine, exact * 1e6, "k-", label="Sneddon, eq. (21)")
+        pts = np.asarray(reference["points"])
+        ax.plot(pts[:, 0], pts[:, 1] * 1e6, "o", label="hfcdem, monitoring points")
+    if len(profile):
+        ax.plot(
+            profile[:, 0], 0.5 * profile[:, 1] * 1e6, ".", ms=3, label="hfcdem, facet midpoints"
+        )
+    ax.set_xlabel("x along the crack (m)")
+    ax.set_ylabel("crack-face displacement u_y = w / 2 (um)")
+    ax.set_title(f"{scene.name}: crack pressure {scene.physics.load.crack_pressure / 1e6:g} MPa")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
