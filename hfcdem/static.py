@@ -34,7 +34,7 @@ from hfcdem.cdem import CDEMSolid, Loads
 from hfcdem.interfaces import FacetState
 from hfcdem.output import write_csv, write_json
 from hfcdem.sampling import evaluate_at_points
-from hfcdem.scene import Scene
+from hfcdem.scene import CrackPlate, Scene
 from hfcdem.series import FieldSeries
 
 MONITORING_POINTS = 11  # along the crack, tips included (the paper's Fig. 6)
@@ -142,7 +142,7 @@ def run_static(
     mine = solid.is_crack & solid.owned
     rows = np.column_stack([solid.midpoints[mine][:, 0], snap.opening[mine]])
     gathered = comm.gather(rows, root=0)
-    profile = np.concatenate(gathered) if comm.rank == 0 else np.zeros((0, 2))
+    profile = np.concatenate(gathered) if gathered is not None else np.zeros((0, 2))
     profile = profile[np.argsort(profile[:, 0])] if len(profile) else profile
     max_opening = float(comm.allreduce(float(snap.opening[mine].max(initial=0.0)), op=MPI.MAX))
 
@@ -155,7 +155,7 @@ def run_static(
         "max_spring_tension_MPa": worst / 1e6 if np.isfinite(worst) else None,
     }
     reference = None
-    if scene.geometry.kind == "crack_plate":
+    if isinstance(scene.geometry, CrackPlate):
         reference = compare_sneddon(
             solid,
             0.5 * scene.geometry.crack.length,
@@ -173,7 +173,8 @@ def run_static(
         summary["sneddon"] = reference
     summary |= record()
     write_json(out / "summary.json", summary, comm)
-    write_csv(out / "crack_opening.csv", ["x_m", "opening_m"], profile.tolist(), comm)
+    rows_out = [(float(x), float(w)) for x, w in zip(profile[:, 0], profile[:, 1], strict=True)]
+    write_csv(out / "crack_opening.csv", ["x_m", "opening_m"], rows_out, comm)
     series = FieldSeries(out, StaticState(solid, loads))
     series.write(0.0)
     series.close()
@@ -192,7 +193,7 @@ def _plot_opening(
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6.5, 4))
-    if reference is not None:
+    if reference is not None and isinstance(scene.geometry, CrackPlate):
         a = 0.5 * scene.geometry.crack.length
         fine = np.linspace(-a, a, 201)
         rock = scene.physics.rock
