@@ -14,9 +14,10 @@ and optional fixed overrides::
     [set]                                       # optional, applied to every case
     "injection.duration" = "5 s"
 
-``hfcdem study STUDY.toml -o DIR`` runs the cases into ``DIR/case_K`` one after
-another, or ``--groups G`` at once with the ranks split into G groups.  A case
-whose directory already holds its own finished results is skipped.  Then it
+``hfcdem study STUDY.toml -o DIR`` runs the cases into ``DIR/case_K_VALUE``
+(``case_1_1-1``, ``case_0_30_deg``) one after another, or ``--groups G`` at
+once with the ranks split into G groups.  A case whose directory already holds
+its own finished results is skipped.  Then it
 writes ``results.csv`` and ``study.png`` (breakdown or peak pressure and fracture
 degree against the swept value).
 """
@@ -26,6 +27,7 @@ from __future__ import annotations
 import copy
 import dataclasses
 import json
+import re
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -198,7 +200,7 @@ def run_study(
             if k % groups != color:
                 continue
             scene = study.case_scene(k)
-            case_dir = out / f"case_{k}"
+            case_dir = out / case_directory(k, study.values[k])
             if _done(case_dir, scene_fingerprint(scene)) and not force:
                 if sub.rank == 0:
                     print(f"case {k}: done before, skipped", flush=True)
@@ -217,7 +219,7 @@ def run_study(
     comm.barrier()
     rows = []
     for k, value in enumerate(study.values):
-        summary_path = out / f"case_{k}" / "summary.json"
+        summary_path = out / case_directory(k, value) / "summary.json"
         summary = json.loads(summary_path.read_text()) if summary_path.exists() else {}
         rows.append({"case": k, "value": value, "x": numeric(value), **summary})
     if comm.rank == 0:
@@ -225,6 +227,12 @@ def run_study(
     comm.barrier()
     say(f"{study.name}: {len(rows)} cases; results in {out}/results.csv and study.png")
     return rows
+
+
+def case_directory(k: int, value: Any) -> str:
+    """Return the folder name of case ``k``: its index and its value, path-safe."""
+    slug = re.sub(r"[^A-Za-z0-9.+-]+", "_", str(value)).strip("_.")[:40]
+    return f"case_{k}_{slug}" if slug else f"case_{k}"
 
 
 def _done(case_dir: Path, fingerprint: str) -> bool:

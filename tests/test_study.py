@@ -5,7 +5,7 @@ from mpi4py import MPI
 
 from hfcdem.cli import main
 from hfcdem.scene import SceneError
-from hfcdem.study import _set, load_study, numeric, run_study
+from hfcdem.study import _set, case_directory, load_study, numeric, run_study
 
 SCENE = "../meshes/scenes/kgd_strip.toml"
 
@@ -50,9 +50,9 @@ def test_study_runs_every_case_and_tables_them(study_file, shared_tmp_path):
     assert lines[2].startswith("4e-3 m3/s,1,0.004,")
     assert (out / "study.png").stat().st_size > 0
     # a second run finds both cases done
-    stamp = (out / "case_0" / "summary.json").stat().st_mtime
+    stamp = (out / "case_0_1e-3_m3_s" / "summary.json").stat().st_mtime
     assert main(["study", str(study_file), "-o", str(out)]) == 0
-    assert (out / "case_0" / "summary.json").stat().st_mtime == stamp
+    assert (out / "case_0_1e-3_m3_s" / "summary.json").stat().st_mtime == stamp
 
 
 def test_bad_study_input_is_named_before_running(shared_tmp_path, study_file):
@@ -73,6 +73,13 @@ def test_set_indexes_arrays_of_tables():
         _set(doc, "geometry.perforations.2.profile", "1-1")
     with pytest.raises(SceneError, match="not a table"):
         _set(doc, "geometry.perforations.0.profile.x", 1)
+
+
+def test_case_folders_are_named_by_value():
+    assert case_directory(1, "1-1") == "case_1_1-1"
+    assert case_directory(0, "30 deg") == "case_0_30_deg"
+    assert case_directory(2, "../x") == "case_2_x"  # never leaves the study folder
+    assert case_directory(3, "") == "case_3"
 
 
 def test_numeric_values():
