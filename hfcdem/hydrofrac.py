@@ -1000,14 +1000,16 @@ class HydraulicFracture:
         self.injected += injected_step
         self.leaked += float(leak.sum())
         # dry facets that filled up turn wet
+        # (with uniform fidelity the wet set is the joined network: a rebuild changes nothing)
         full = (~wet) & (self.content >= vf * (1.0 - 1e-12))
-        if full.any() and self.settings.fidelity == "viscous":
+        fills = bool(full.any()) and self.settings.fidelity == "viscous"
+        if fills:
             self.wet_since[full] = t1
             self.wet = np.isfinite(self.wet_since)
             self.pressure[full] = 0.0
         self.t = t1
         self._store_state()
-        if full.any():
+        if fills:
             self._rebuild()
         stored_total = self.cavity_content + float(self.content.sum()) - self.initial_fluid
         err = abs(self.injected - stored_total - self.leaked) / max(abs(self.injected), 1e-300)
