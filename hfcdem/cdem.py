@@ -434,11 +434,14 @@ class CDEMSolid:
     def _ksp(self, A: PETSc.Mat) -> PETSc.KSP:
         db = PETSc.Options()
         if self.solver_kind == "direct":
+            # K is symmetric (SIPG glue, symmetric springs, symmetric Dirichlet rows and
+            # columns): MUMPS LDL^T factorises it in about half the time of LU
             defaults: dict[str, object] = {
                 "ksp_type": "preonly",
-                "pc_type": "lu",
+                "pc_type": "cholesky",
                 "pc_factor_mat_solver_type": "mumps",
             }
+            A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
         else:
             defaults = {"ksp_type": "cg", "pc_type": "gamg", "ksp_rtol": 1e-10, "ksp_max_it": 2000}
         ours = []

@@ -379,3 +379,30 @@ def test_coulomb_friction_on_a_closed_crack_matches_mode_ii_slip(friction_angle)
     else:
         assert sliding == 0
         assert slip < 0.01 * 4 * 10 * MPa * a * (1 - nu**2) / e  # spring compliance only
+
+
+def test_stiffness_is_symmetric_so_cholesky_applies():
+    # the direct solver factorises K as LDL^T: springs in every state, the Nitsche glue
+    # and the Dirichlet rows must keep it symmetric
+    plate = CrackPlate(A, 5 * A, A / 5, A)
+    solid = CDEMSolid(
+        create_crack_plate(plate),
+        STEEL,
+        InSituStress(10 * MPa, 5 * MPa),
+        InterfaceModel(),
+        zone=lambda x: np.abs(x[1]) < A,
+        rollers={"symmetry_x": 0},
+        fixed=["outer"],
+    )
+    # one facet of each broken state next to the intact springs and the glue
+    some = np.flatnonzero(~solid.is_crack)[:3]
+    solid.state[some] = FacetState.TENSILE
+    solid.contact[some] = [0, 1, 2]  # open, stick, slip
+    _, ksp = solid.factorize()
+    A_ = ksp.getOperators()[0]
+    assert A_.isSymmetric(1e-10 * A_.norm())
+    assert ksp.getPC().getType() == "cholesky"
+    ksp.destroy()
+    # and it solves as before
+    solid.solve(Loads(crack_pressure=P))
+    assert np.all(np.isfinite(solid.u.x.array))
