@@ -74,6 +74,20 @@ def test_perforation_no2_demo_runs_the_scene_and_names_its_files(shared_tmp_path
         assert "fracture.png" in printed
 
 
+def test_field_cluster_demo_starts_from_the_completion_pressure(shared_tmp_path, capsys):
+    out = shared_tmp_path / "field"
+    summary = load("field_cluster").main(["-o", str(out), "--duration", "1 s"])
+    assert summary["scene"] == "field_cluster"
+    assert summary["simulated_time_s"] == pytest.approx(1.0)
+    assert summary["stopped"] is None
+    # pumping into the cased well's six tunnels raises the pressure from the 17 MPa start
+    assert summary["peak_pressure_MPa"] > 17.0
+    assert summary["cells"] > 10_000
+    printed = capsys.readouterr().out
+    if MPI.COMM_WORLD.rank == 0:  # only rank 0 prints
+        assert "field 43.0 MPa" in printed
+
+
 def test_shape_study_demo_sweeps_profiles_and_checks_orderings(shared_tmp_path, capsys):
     out = shared_tmp_path / "shapes"
     rows = load("shape_study").main(["-o", str(out), "--models", "no2,1-2", "--duration", "0.5 s"])

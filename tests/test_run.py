@@ -97,6 +97,46 @@ def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
     assert pressures(out) == pytest.approx(pressures(straight), rel=1e-9)
 
 
+def _pressures(path):
+    lines = (path / "history.csv").read_text().splitlines()
+    col = lines[0].split(",").index("injection_pressure")
+    return [float(line.split(",")[col]) for line in lines[1:]]
+
+
+@pytest.mark.mpi
+def test_a_run_stopped_on_two_ranks_resumes_on_one(shared_tmp_path):
+    # interfaces are keyed by global vertex ids, so the checkpoint does not depend on the
+    # partition: stop on every rank, go on with rank 0 alone
+    world = MPI.COMM_WORLD
+    scene = load_scene(KGD, "coarse")
+    straight = shared_tmp_path / "straight"
+    run_scene(scene, straight)
+
+    class Interrupt(Exception):
+        pass
+
+    def stop_after_four_seconds(msg):
+        if msg.startswith("t ") and float(msg.split()[1]) >= 4.0:
+            raise Interrupt
+
+    out = shared_tmp_path / "resumed"
+    with pytest.raises(Interrupt):
+        run_scene(scene, out, say=stop_after_four_seconds)
+    world.barrier()
+    error = None
+    if world.rank == 0:
+        try:
+            summary = run_scene(scene, out, comm=MPI.COMM_SELF, resume=True)
+            assert summary["simulated_time_s"] == pytest.approx(10.0)
+            assert summary["ranks"] == 1
+            assert _pressures(out) == pytest.approx(_pressures(straight), rel=1e-6)
+        except AssertionError as exc:
+            error = exc
+    error = world.bcast(error, root=0)
+    if error is not None:
+        raise error
+
+
 def test_a_cased_wellbore_leaves_only_the_tunnel_walls_pressurised():
     names = ["outer_x0", "perforation_1_tip", "perforation_1_wall", "rock", "wellbore_wall"]
     assert pressurised_groups(names, "cased") == ("perforation_1_tip", "perforation_1_wall")
