@@ -94,6 +94,7 @@ def build_solid(scene: Scene, tmesh: Any) -> CDEMSolid:
         rollers=rollers,
         fixed=fixed,
         strength_points=phys.solver.strength_points,
+        solver=phys.solver.linear_solver,
     )
 
 

@@ -56,6 +56,8 @@ them so a run's record can print what was assumed.  Any invalid field raises
     max_breaks_per_iteration = 1
     strength_points = "vertices" # or "midpoint": where a spring's strength is checked
     break_tolerance = 0.01      # a step may overshoot the next break by this fraction
+    linear_solver = "auto"      # "direct" (MUMPS LDL^T), "iterative" (CG + GAMG) or "auto":
+                                # direct up to 300k unknowns
 """
 
 from __future__ import annotations
@@ -89,6 +91,7 @@ class SolverSettings:
     max_breaks_per_iteration: int | None = None
     strength_points: str = "vertices"
     break_tolerance: float = 0.01
+    linear_solver: str = "auto"
 
 
 @dataclass(frozen=True)
@@ -296,6 +299,9 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             so, "strength_points", "string", "vertices", choices=("vertices", "midpoint")
         ),
         break_tolerance=get(so, "break_tolerance", "number", 0.01),
+        linear_solver=get(
+            so, "linear_solver", "string", "auto", choices=("auto", "direct", "iterative")
+        ),
     )
     check(
         0.0 < solver.break_tolerance <= 1.0,

@@ -137,6 +137,22 @@ def test_a_run_stopped_on_two_ranks_resumes_on_one(shared_tmp_path):
         raise error
 
 
+def test_the_linear_solver_is_a_scene_choice_with_the_same_answer(shared_tmp_path):
+    scenes = {
+        kind: load_scene(
+            KGD, "coarse", overrides={"injection.duration": "2 s", "solver.linear_solver": kind}
+        )
+        for kind in ("direct", "iterative")
+    }
+    runs = {kind: run_scene(s, shared_tmp_path / kind) for kind, s in scenes.items()}
+    assert runs["direct"]["peak_pressure_MPa"] == pytest.approx(
+        runs["iterative"]["peak_pressure_MPa"], rel=1e-5
+    )
+    assert _pressures(shared_tmp_path / "direct") == pytest.approx(
+        _pressures(shared_tmp_path / "iterative"), rel=1e-5
+    )
+
+
 def test_a_cased_wellbore_leaves_only_the_tunnel_walls_pressurised():
     names = ["outer_x0", "perforation_1_tip", "perforation_1_wall", "rock", "wellbore_wall"]
     assert pressurised_groups(names, "cased") == ("perforation_1_tip", "perforation_1_wall")

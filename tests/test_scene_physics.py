@@ -94,6 +94,7 @@ def test_cavity_options():
         ({"injection__wall_film": "0 um"}, "injection.wall_film"),
         ({"injection__wall_film": 5e-6}, "injection.wall_film"),  # a number without unit
         ({"injection__wall_joints": "damp"}, "injection.wall_joints"),
+        ({"solver__linear_solver": "lu"}, "solver.linear_solver"),
     ],
 )
 def test_bad_input_names_the_key(changes, key):
