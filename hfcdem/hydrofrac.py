@@ -197,6 +197,7 @@ class HydraulicFracture:
         self.injected = 0.0
         self.leaked = 0.0
         self.rebuilds = 0
+        self.rebuild_seconds = 0.0
         self.first_break_time: float | None = None
         self.initial_failures = 0
         self._last_ratio = 0.0  # worst failure ratio of eligible facets, last accepted step
@@ -471,7 +472,7 @@ class HydraulicFracture:
         vc0 = self.cavity_volume + wall - self._cavity_reference
         self.op = _Operator(base=base, columns=columns, v0=v0, h=h, vc0=vc0, hc=hc)
         self.rebuilds += 1
-        self.rebuild_seconds = getattr(self, "rebuild_seconds", 0.0) + time.perf_counter() - t0
+        self.rebuild_seconds += time.perf_counter() - t0
 
     def _offsets(self) -> np.ndarray:
         """Return the intact pre-compression offset of each broken facet.
@@ -1129,6 +1130,9 @@ class HydraulicFracture:
         "initial_fluid",
         "first_break_time",
         "_last_ratio",
+        "initial_failures",
+        "rebuilds",
+        "rebuild_seconds",
     )
 
     def checkpoint(self) -> dict:

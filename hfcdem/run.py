@@ -221,6 +221,7 @@ def run_scene(
         return run_static(scene, solid, out, say, record)
     frac = build_fracture(scene, solid)
     checkpoint = out / "checkpoint.json"
+    first: dict[str, Any] | None = None  # where the first crack broke, once it has
     if resume:
         data = comm.bcast(
             json.loads(checkpoint.read_text()) if comm.rank == 0 and checkpoint.exists() else None,
@@ -230,6 +231,7 @@ def run_scene(
             say("nothing to resume: no checkpoint.json; starting from t = 0")
         else:
             frac.restore(data)
+            first = data.get("first_crack")  # the break events themselves are not kept
             say(f"resumed at t = {frac.t:.6g} s ({len(frac.history)} steps done)")
     resumed = bool(frac.history)
     if not resumed:
@@ -249,7 +251,9 @@ def run_scene(
             frac.dt = min(frac.dt, t_end - frac.t)
             rec = frac.step()
             frac.write_history(out / "history.csv")
-            write_json(checkpoint, frac.checkpoint(), comm)
+            if first is None and frac.first_break_time is not None:
+                first = _first_crack(scene, frac)
+            write_json(checkpoint, frac.checkpoint() | {"first_crack": first}, comm)
             if rec.time >= due * (1.0 - 1e-12):
                 series.write(rec.time)
                 while due <= rec.time * (1.0 + 1e-12):
@@ -284,14 +288,14 @@ def run_scene(
         "first_crack_time_s": frac.first_break_time,
         "first_crack_pressure_MPa": _first_crack_pressure(frac),
         "initial_failures": frac.initial_failures,
-        "first_crack": _first_crack(scene, frac),
+        "first_crack": first if first is not None else _first_crack(scene, frac),
         "fracture_degree": solid.fracture_degree(),
         "tensile_failures": counts["tensile"],
         "shear_failures": counts["shear"],
         "simulated_time_s": frac.t,
         "steps": len(frac.history),
         "rebuilds": frac.rebuilds,
-        "rebuild_seconds": getattr(frac, "rebuild_seconds", 0.0),
+        "rebuild_seconds": frac.rebuild_seconds,
         "max_mass_error": max((r.mass_error for r in frac.history), default=0.0),
         "stopped": stopped,
         **record(),

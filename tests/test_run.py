@@ -81,6 +81,11 @@ def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
     frames_before = _read_pvd(out / "interfaces.pvd")
     summary = run_scene(scene, out, resume=True)
     assert summary["simulated_time_s"] == pytest.approx(10.0)
+    # what happened before the stop is still counted
+    first = json.loads((straight / "summary.json").read_text())
+    assert summary["first_crack"]["point_m"] == pytest.approx(first["first_crack"]["point_m"])
+    assert summary["initial_failures"] == first["initial_failures"]
+    assert summary["rebuilds"] >= first["rebuilds"]
     # the interface frames written before the stop are kept, the series goes on
     frames = _read_pvd(out / "interfaces.pvd")
     assert frames[: len(frames_before)] == frames_before
