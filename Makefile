@@ -25,7 +25,7 @@ test:
 	@$(CONTAINER) run bash tests/run-suite.sh $(RANKS)
 
 demo:
-	@$(CONTAINER) run mpirun -n $(RANKS) python3 demos/perforation_no2.py -o results/perforation_no2
+	@$(CONTAINER) run mpirun -n $(RANKS) python3 demos/perforation_no2.py -o results/perforation_no2 --force
 	@echo "results: results/perforation_no2/ (pressure.png, fracture.png, summary.json; fields.bp and interfaces.pvd for ParaView)"
 
 # CMD reaches the shell through the environment, unexpanded by make, so quoting

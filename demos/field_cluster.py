@@ -20,12 +20,13 @@ fields.bp, interfaces.pvd).
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from mpi4py import MPI
 
 from hfcdem.references import FIELD_FIRST_CRACK_S, FIELD_MEASURED, FIELD_PAPER_SIMULATED
-from hfcdem.run import run_scene
+from hfcdem.run import OutputInUse, run_scene
 from hfcdem.scene import load_scene
 from hfcdem.study import breakdown_text
 
@@ -66,4 +67,9 @@ def main(argv: list[str] | None = None) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except OutputInUse as exc:  # another scene's results: say so once, keep them
+        if MPI.COMM_WORLD.rank == 0:
+            print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(3) from None

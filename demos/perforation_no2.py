@@ -22,12 +22,13 @@ pictures and ParaView files are.
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from mpi4py import MPI
 
 from hfcdem.references import CHARGES
-from hfcdem.run import run_scene
+from hfcdem.run import OutputInUse, run_scene
 from hfcdem.scene import load_scene
 from hfcdem.study import breakdown_text
 
@@ -75,4 +76,9 @@ def main(argv: list[str] | None = None) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except OutputInUse as exc:  # another scene's results: say so once, keep them
+        if MPI.COMM_WORLD.rank == 0:
+            print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(3) from None

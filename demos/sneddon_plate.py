@@ -25,11 +25,12 @@ crack_opening.csv and .png, fields.bp and interfaces.pvd for ParaView.
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from mpi4py import MPI
 
-from hfcdem.run import run_scene
+from hfcdem.run import OutputInUse, run_scene
 from hfcdem.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
@@ -68,4 +69,9 @@ def main(argv: list[str] | None = None) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except OutputInUse as exc:  # another scene's results: say so once, keep them
+        if MPI.COMM_WORLD.rank == 0:
+            print(f"error: {exc}", file=sys.stderr)
+        raise SystemExit(3) from None
