@@ -9,6 +9,7 @@ physics (breaks, contact switches), the seconds from the linear solver.
 
     make run CMD="mpirun -n 2 python3 benchmarks/perforation_cost.py coarse default paper"
     make run CMD="mpirun -n 2 python3 benchmarks/perforation_cost.py coarse --run"
+    make run CMD="mpirun -n 2 python3 benchmarks/perforation_cost.py default --solver direct"
 """
 
 from __future__ import annotations
@@ -38,12 +39,19 @@ def main() -> None:
     parser.add_argument("resolutions", nargs="+", help="coarse, default or paper")
     parser.add_argument("--run", action="store_true", help="also run the whole injection")
     parser.add_argument("--duration", default=None, help="injection time for --run")
+    parser.add_argument(
+        "--solver", default="auto", choices=("auto", "direct", "iterative"), help="linear solver"
+    )
     args = parser.parse_args()
     say = print if comm.rank == 0 else (lambda *a, **k: None)
-    say("| resolution | cells | unknowns | mesh s | build s | rebuild s | memory MB | run |")
-    say("|---|---|---|---|---|---|---|---|")
+    say(
+        "| resolution | solver | cells | unknowns | mesh s | build s | rebuild s | memory MB "
+        "| run |"
+    )
+    say("|---|---|---|---|---|---|---|---|---|")
     for res in args.resolutions:
-        scene = load_scene(SCENE, None if res == "default" else res)
+        chosen = {"solver.linear_solver": args.solver}
+        scene = load_scene(SCENE, None if res == "default" else res, overrides=chosen)
         t0 = time.perf_counter()
         tmesh = create_scene_mesh(scene, comm).tmesh
         t1 = time.perf_counter()
@@ -56,7 +64,7 @@ def main() -> None:
         dofs = solid.V.dofmap.index_map.size_global * 3
         run = ""
         if args.run:
-            overrides = {"injection.duration": args.duration} if args.duration else None
+            overrides = chosen | ({"injection.duration": args.duration} if args.duration else {})
             scene = load_scene(SCENE, None if res == "default" else res, overrides=overrides)
             s = run_scene(scene, Path("results/benchmarks") / f"no2_{res}", comm, force=True)
             run = (
@@ -64,8 +72,8 @@ def main() -> None:
                 f"{s['steps']} steps, {s['rebuilds']} rebuilds ({s['rebuild_seconds']:.0f} s)"
             )
         say(
-            f"| {res} | {cells} | {dofs} | {t1 - t0:.1f} | {t2 - t1:.1f} | {t3 - t2:.2f} | "
-            f"{memory_mb():.0f} | {run} |"
+            f"| {res} | {solid.solver_kind} | {cells} | {dofs} | {t1 - t0:.1f} | "
+            f"{t2 - t1:.1f} | {t3 - t2:.2f} | {memory_mb():.0f} | {run} |"
         )
         del frac, solid, tmesh
 
