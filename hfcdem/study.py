@@ -244,7 +244,21 @@ def _done(case_dir: Path, fingerprint: str) -> bool:
     return run.get("fingerprint") == fingerprint and summary.get("stopped") is None
 
 
+STATIC_COLUMNS = [
+    "case",
+    "x",
+    "max_crack_opening_m",
+    "sneddon_centre_relative_error",
+    "overstressed_interfaces",
+    "max_spring_tension_MPa",
+    "wall_time_s",
+]
+
+
 def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
+    if rows and all(r.get("kind") == "static" for r in rows):
+        _write_static_results(out, study, rows)
+        return
     cols = [
         "case",
         "x",
@@ -258,16 +272,7 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
         "wall_time_s",
     ]
 
-    def num(v: Any) -> float:
-        return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else float("nan")
-
-    from hfcdem.output import write_atomic
-
-    lines = [",".join(["value", *cols])]
-    for r in rows:
-        label = str(r["value"]).replace(",", ";")
-        lines.append(",".join([label] + [f"{num(r.get(c)):.10g}" for c in cols]))
-    write_atomic(out / "results.csv", "\n".join(lines) + "\n")
+    _write_table(out / "results.csv", rows, cols)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -276,14 +281,14 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
     categorical = any(r["x"] is None for r in rows)  # e.g. profile names
     xs = [r["case"] if categorical else r["x"] for r in rows]
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
-    bd = [num(r.get("breakdown_pressure_MPa")) for r in rows]
-    pk = [num(r.get("peak_pressure_MPa")) for r in rows]
+    bd = [_num(r.get("breakdown_pressure_MPa")) for r in rows]
+    pk = [_num(r.get("peak_pressure_MPa")) for r in rows]
     a1.plot(xs, pk, "s--", label="peak pressure (highest in the run)")
     a1.plot(xs, bd, "o-", label="breakdown pressure")
-    fc = [num(r.get("first_crack_pressure_MPa")) for r in rows]
+    fc = [_num(r.get("first_crack_pressure_MPa")) for r in rows]
     a1.plot(xs, fc, "^:", label="first crack")
     a1.set_ylabel("pressure (MPa)")
-    a2.plot(xs, [num(r.get("fracture_degree")) for r in rows], "o-")
+    a2.plot(xs, [_num(r.get("fracture_degree")) for r in rows], "o-")
     a2.set_ylabel("fracture degree")
     for ax in (a1, a2):
         ax.set_xlabel(study.parameter + ("" if categorical else " (SI)"))
@@ -291,6 +296,50 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
             ax.set_xticks(xs, [str(r["value"]) for r in rows])
         ax.grid(alpha=0.3)
     a1.legend()
+    fig.suptitle(study.name)
+    fig.tight_layout()
+    fig.savefig(out / "study.png", dpi=110)
+    plt.close(fig)
+
+
+def _num(v: Any) -> float:
+    return float(v) if isinstance(v, int | float) and not isinstance(v, bool) else float("nan")
+
+
+def _write_table(path: Path, rows: list[dict[str, Any]], cols: list[str]) -> None:
+    from hfcdem.output import write_atomic
+
+    lines = [",".join(["value", *cols])]
+    for r in rows:
+        label = str(r["value"]).replace(",", ";")
+        lines.append(",".join([label] + [f"{_num(r.get(c)):.10g}" for c in cols]))
+    write_atomic(path, "\n".join(lines) + "\n")
+
+
+def _write_static_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
+    """Table and plot the crack opening (and the error against Sneddon) of static cases."""
+    for r in rows:
+        r["sneddon_centre_relative_error"] = r.get("sneddon", {}).get("centre_relative_error")
+    _write_table(out / "results.csv", rows, STATIC_COLUMNS)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    categorical = any(r["x"] is None for r in rows)
+    xs = [r["case"] if categorical else r["x"] for r in rows]
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
+    a1.plot(xs, [_num(r.get("max_crack_opening_m")) * 1e6 for r in rows], "o-")
+    a1.set_ylabel("largest crack opening (um)")
+    errors = [_num(r.get("sneddon_centre_relative_error")) * 100 for r in rows]
+    a2.plot(xs, errors, "o-")
+    a2.axhline(0.0, color="k", lw=0.8)
+    a2.set_ylabel("centre u_y against Sneddon (%)")
+    for ax in (a1, a2):
+        ax.set_xlabel(study.parameter + ("" if categorical else " (SI)"))
+        if categorical:
+            ax.set_xticks(xs, [str(r["value"]) for r in rows])
+        ax.grid(alpha=0.3)
     fig.suptitle(study.name)
     fig.tight_layout()
     fig.savefig(out / "study.png", dpi=110)

@@ -94,3 +94,17 @@ def test_cases_run_at_once_in_rank_groups(study_file, shared_tmp_path):
     rows = run_study(load_study(study_file), out, groups=MPI.COMM_WORLD.size)
     assert all(r.get("stopped", "missing") is None for r in rows)
     assert all(r["ranks"] == 1 for r in rows)  # each case had its own single rank
+
+
+def test_a_static_study_tables_the_opening_and_converges_in_alpha(shared_tmp_path):
+    # the shipped Sneddon study: the spring softening falls as 1/alpha
+    study = load_study("studies/sneddon_alpha.toml").with_values((10, 100, 1000))
+    out = shared_tmp_path / "alpha"
+    rows = run_study(study, out)
+    errors = [r["sneddon"]["centre_relative_error"] for r in rows]
+    limit = errors[-1]
+    assert abs(limit) < 0.02  # what is left is the discretisation
+    assert 5.0 < (errors[0] - limit) / (errors[1] - limit) < 20.0  # one decade of alpha
+    lines = (out / "results.csv").read_text().splitlines()
+    assert lines[0].startswith("value,case,x,max_crack_opening_m,sneddon_centre_relative_error")
+    assert (out / "study.png").stat().st_size > 0
