@@ -283,6 +283,19 @@ _CRACK_PLATE: dict[str, Any] = {
     },
 }
 
+# The same plate as the Sneddon verification scene: the half x >= 0 (the plate and the
+# pressure are symmetric about x = 0), so the coarse mesh can be twice as fine.
+_SNEDDON_PLATE: dict[str, Any] = {
+    **_CRACK_PLATE,
+    "symmetry": ["x"],
+    "mesh": {
+        "size": "5 mm",
+        "size_far": "50 mm",
+        "grading": 0.3,
+        "resolutions": {"coarse": {"size": "10 mm", "size_far": "100 mm"}},
+    },
+}
+
 # Seed hfdda sec. 4.2: 160 m x 160 m, injection at the origin, the fracture
 # may run 24 m each way; 1 m of each wing is opened at the start.
 _KGD: dict[str, Any] = {
@@ -331,6 +344,7 @@ PRESETS: dict[str, dict[str, Any]] = {
     "lab_specimen": _LAB,
     "field_cluster": _CLUSTER,
     "crack_plate": _CRACK_PLATE,
+    "sneddon_plate": _SNEDDON_PLATE,
     "kgd_strip": _KGD,
     "borehole_plate": _BOREHOLE,
 }
