@@ -290,11 +290,7 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
     a1.set_ylabel("pressure (MPa)")
     a2.plot(xs, [_num(r.get("fracture_degree")) for r in rows], "o-")
     a2.set_ylabel("fracture degree")
-    for ax in (a1, a2):
-        ax.set_xlabel(study.parameter + ("" if categorical else " (SI)"))
-        if categorical:
-            ax.set_xticks(xs, [str(r["value"]) for r in rows])
-        ax.grid(alpha=0.3)
+    _label_axes((a1, a2), study, rows, xs, categorical)
     a1.legend()
     fig.suptitle(study.name)
     fig.tight_layout()
@@ -335,12 +331,17 @@ def _write_static_results(out: Path, study: Study, rows: list[dict[str, Any]]) -
     a2.plot(xs, errors, "o-")
     a2.axhline(0.0, color="k", lw=0.8)
     a2.set_ylabel("centre u_y against Sneddon (%)")
-    for ax in (a1, a2):
-        ax.set_xlabel(study.parameter + ("" if categorical else " (SI)"))
-        if categorical:
-            ax.set_xticks(xs, [str(r["value"]) for r in rows])
-        ax.grid(alpha=0.3)
+    _label_axes((a1, a2), study, rows, xs, categorical)
     fig.suptitle(study.name)
     fig.tight_layout()
     fig.savefig(out / "study.png", dpi=110)
     plt.close(fig)
+
+
+def _label_axes(axes: Any, study: Study, rows: list[dict[str, Any]], xs: list, categorical: bool):
+    """Name the swept value on the x axes (the values themselves when they are names)."""
+    for ax in axes:
+        ax.set_xlabel(study.parameter + ("" if categorical else " (SI)"))
+        if categorical:
+            ax.set_xticks(xs, [str(r["value"]) for r in rows])
+        ax.grid(alpha=0.3)

@@ -61,21 +61,28 @@ def test_cli_reports_bad_input_with_the_key(shared_tmp_path, capsys):
     assert not (shared_tmp_path / "bad_out").exists()
 
 
-def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
-    scene = load_scene(KGD, "coarse")
-    straight = shared_tmp_path / "straight"
-    run_scene(scene, straight)
+class _Interrupt(Exception):
+    pass
 
-    class Interrupt(Exception):
-        pass
+
+def _straight_and_stopped(tmp):
+    """Run KGD to the end into tmp/straight, and again into tmp/resumed stopped at 4 s."""
+    scene = load_scene(KGD, "coarse")
+    straight = tmp / "straight"
+    run_scene(scene, straight)
 
     def stop_after_four_seconds(msg):
         if msg.startswith("t ") and float(msg.split()[1]) >= 4.0:
-            raise Interrupt
+            raise _Interrupt
 
-    out = shared_tmp_path / "resumed"
-    with pytest.raises(Interrupt):
+    out = tmp / "resumed"
+    with pytest.raises(_Interrupt):
         run_scene(scene, out, say=stop_after_four_seconds)
+    return scene, straight, out
+
+
+def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
+    scene, straight, out = _straight_and_stopped(shared_tmp_path)
     kept = (out / "history.csv").read_text().splitlines()
     assert 2 < len(kept) < len((straight / "history.csv").read_text().splitlines())
     frames_before = _read_pvd(out / "interfaces.pvd")
@@ -113,20 +120,7 @@ def test_a_run_stopped_on_two_ranks_resumes_on_one(shared_tmp_path):
     # interfaces are keyed by global vertex ids, so the checkpoint does not depend on the
     # partition: stop on every rank, go on with rank 0 alone
     world = MPI.COMM_WORLD
-    scene = load_scene(KGD, "coarse")
-    straight = shared_tmp_path / "straight"
-    run_scene(scene, straight)
-
-    class Interrupt(Exception):
-        pass
-
-    def stop_after_four_seconds(msg):
-        if msg.startswith("t ") and float(msg.split()[1]) >= 4.0:
-            raise Interrupt
-
-    out = shared_tmp_path / "resumed"
-    with pytest.raises(Interrupt):
-        run_scene(scene, out, say=stop_after_four_seconds)
+    scene, straight, out = _straight_and_stopped(shared_tmp_path)
     world.barrier()
     error = None
     if world.rank == 0:
