@@ -50,8 +50,9 @@ from hfcdem.network import Network, build_network, gather_rows
 from hfcdem.output import write_csv
 
 # a floor on storage and aperture keeps a closed, dry facet's equations regular
-_CONTACT_ROUNDS = 1  # rounds of contact switches per state iteration loop that may open
 _APERTURE_FLOOR = 1e-9  # m
+# rounds of contact switches in one step's state loop that may open faces (see _try_step)
+_CONTACT_ROUNDS = 1
 
 
 class SimulationStopped(RuntimeError):

@@ -336,9 +336,9 @@ def _picture_fracture(path: Path, scene: Scene, frac: HydraulicFracture) -> None
 def _first_crack_pressure(frac: HydraulicFracture) -> float | None:
     """Injection pressure of the state located on the first crack (MPa)."""
     t = frac.first_break_time
-    before = [r.injection_pressure for r in frac.history if t is not None and r.time < t]
     if t is None:
         return None
+    before = [r.injection_pressure for r in frac.history if r.time < t]
     return max([*before, frac.settings.initial_pressure]) / 1e6
 
 

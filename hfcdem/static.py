@@ -34,7 +34,7 @@ from hfcdem.cdem import CDEMSolid, Loads
 from hfcdem.interfaces import FacetState
 from hfcdem.output import write_csv, write_json
 from hfcdem.sampling import evaluate_at_points
-from hfcdem.scene import CrackPlate, Scene
+from hfcdem.scene import CrackPlate, Scene, SceneError
 from hfcdem.series import FieldSeries
 
 MONITORING_POINTS = 11  # along the crack, tips included (the paper's Fig. 6)
@@ -121,8 +121,6 @@ def run_static(
     load = scene.physics.load
     loads = Loads(crack_pressure=load.crack_pressure)
     if not comm.allreduce(int(np.count_nonzero(solid.is_crack & solid.owned)), op=MPI.SUM):
-        from hfcdem.scene import SceneError
-
         raise SceneError("load.crack_pressure", "the scene has no pre-existing crack (tag 'crack')")
     t0 = time.perf_counter()
     solid.solve(loads)
