@@ -41,6 +41,7 @@ from hfcdem.interfaces import (
 )
 from hfcdem.meshing import TaggedMesh
 from hfcdem.solid import ElasticMaterial, InSituStress, strain, stress
+from hfcdem.solvers import DIRECT_CHOLESKY, check_ksp, create_ksp
 
 # interior-facet integral ids
 _SPRING = 1  # intact, or broken and closed in stick: kn and ks
@@ -432,33 +433,15 @@ class CDEMSolid:
     # ------------------------------------------------------------------ solve
 
     def _ksp(self, A: PETSc.Mat) -> PETSc.KSP:
-        db = PETSc.Options()
         if self.solver_kind == "direct":
             # K is symmetric (SIPG glue, symmetric springs, symmetric Dirichlet rows and
             # columns): MUMPS LDL^T factorises it in about half the time of LU
-            defaults: dict[str, object] = {
-                "ksp_type": "preonly",
-                "pc_type": "cholesky",
-                "pc_factor_mat_solver_type": "mumps",
-            }
+            defaults: dict[str, object] = dict(DIRECT_CHOLESKY)
             A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
         else:
             defaults = {"ksp_type": "cg", "pc_type": "gamg", "ksp_rtol": 1e-10, "ksp_max_it": 2000}
-        ours = []
-        for key, value in {**defaults, **self.petsc_options}.items():
-            if not db.hasName(self.prefix + key):
-                db.setValue(self.prefix + key, value)
-                ours.append(self.prefix + key)
-        ksp = PETSc.KSP().create(self.comm)
-        ksp.setOptionsPrefix(self.prefix)
-        ksp.setOperators(A)
-        if self.solver_kind == "iterative":
             A.setNearNullSpace(self._rigid_modes())
-        ksp.setFromOptions()
-        # the database is global: leave only what the user put there
-        for name in ours:
-            db.delValue(name)
-        return ksp
+        return create_ksp(A, self.prefix, {**defaults, **self.petsc_options}, self.comm)
 
     def _rigid_modes(self) -> PETSc.NullSpace:
         """Rigid-body modes of the DG displacement, for the algebraic multigrid."""
@@ -511,18 +494,14 @@ class CDEMSolid:
         dolfinx.fem.petsc.set_bc(b, self._bcs)
         ksp.solve(b, target.x.petsc_vec)
         target.x.scatter_forward()
-        reason = ksp.getConvergedReason()
         b.destroy()
-        if reason < 0:
-            hint = (
-                "the factorisation failed: a block may be detached (raise "
-                "InterfaceModel.residual_stiffness) or held by no boundary condition"
-                if reason == PETSc.KSP.ConvergedReason.DIVERGED_PC_FAILED
-                else "for ill-conditioned springs (very large alpha) use the direct solver"
-            )
-            raise RuntimeError(
-                f"CDEM solve ({self.prefix}) did not converge: PETSc reason {reason}; {hint}"
-            )
+        check_ksp(
+            ksp,
+            "CDEM solve",
+            "a failed factorisation means a block may be detached (raise "
+            "InterfaceModel.residual_stiffness) or held by no boundary condition; "
+            "an iterative solve that does not converge wants the direct solver",
+        )
         if not np.all(np.isfinite(target.x.array)):
             raise FloatingPointError(
                 "CDEM solve produced non-finite displacements: check that every block is "

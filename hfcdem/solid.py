@@ -27,6 +27,7 @@ import ufl
 from petsc4py import PETSc
 
 from hfcdem.meshing import TaggedMesh
+from hfcdem.solvers import DIRECT_LU, check_ksp, create_ksp
 
 
 def _check_positive(name: str, value: float, unit: str, upper: float = math.inf) -> None:
@@ -179,7 +180,7 @@ def solve_cavity_pressure(
     )
 
 
-DIRECT_SOLVER = {"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"}
+DIRECT_SOLVER = DIRECT_LU
 
 
 def solve_linear(
@@ -203,25 +204,12 @@ def solve_linear(
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     dolfinx.fem.petsc.set_bc(b, bcs)
 
-    db = PETSc.Options()
-    ours = []
-    for key, value in {**DIRECT_SOLVER, **(options or {})}.items():
-        if not db.hasName(prefix + key):
-            db.setValue(prefix + key, value)
-            ours.append(prefix + key)
-    ksp = PETSc.KSP().create(A.comm)
-    ksp.setOptionsPrefix(prefix)
-    ksp.setOperators(A)
-    ksp.setFromOptions()
-    for name in ours:  # the database is global: leave only what the user put there
-        db.delValue(name)
+    ksp = create_ksp(A, prefix, {**DIRECT_SOLVER, **(options or {})})
     ksp.solve(b, uh.x.petsc_vec)
     uh.x.scatter_forward()
-    reason = ksp.getConvergedReason()
     A.destroy()
     b.destroy()
-    if reason < 0:
-        raise RuntimeError(f"linear solve {prefix!r} did not converge (PETSc reason {reason})")
+    check_ksp(ksp, f"linear solve {prefix!r}")
     if not np.all(np.isfinite(uh.x.array)):
         raise FloatingPointError(f"linear solve {prefix!r} produced non-finite values")
     return ksp

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import gc
+import os
+import sys
 from pathlib import Path
 
 import pytest
@@ -18,6 +20,29 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             item.add_marker(skip_serial)
         if "mpi" in item.keywords and size < 2:
             item.add_marker(skip_mpi)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo) -> object:
+    """Under mpirun, a failure on one rank ends the whole run at once.
+
+    The other ranks may be waiting in a collective that the failed rank will never
+    reach (or they reach the next test's collectives out of step): without this,
+    the run hangs instead of failing.  The failure is printed first, since the
+    abort ends pytest before its summary.  ``HFCDEM_NO_ABORT=1`` turns it off.
+    """
+    outcome = yield
+    report = outcome.get_result()  # type: ignore[attr-defined]
+    comm = MPI.COMM_WORLD
+    if report.failed and comm.size > 1 and os.environ.get("HFCDEM_NO_ABORT") != "1":
+        sys.stdout.flush()
+        sys.stderr.write(
+            f"\n==== rank {comm.rank}: {item.nodeid} FAILED ({report.when}); "
+            f"aborting all {comm.size} ranks ====\n{report.longreprtext}\n"
+            f"==== rank {comm.rank}: MPI_Abort after {item.nodeid} ====\n"
+        )
+        sys.stderr.flush()
+        comm.Abort(1)
 
 
 @pytest.fixture(autouse=True)

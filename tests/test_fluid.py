@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from scipy.integrate import quad
 
 from hfcdem.fluid import CarterLeakOff, Fluid, Injection
 
@@ -42,8 +43,27 @@ def test_bad_schedules_are_named():
         Injection.pressure_schedule([(0.0, 1e6)]).volume_between(0.0, 1.0)
 
 
-def test_carter_volume():
-    lo = CarterLeakOff(1e-4)
-    v = lo.volume(np.array([2.0]), np.array([1.0]), 1.0, 5.0)
-    assert v[0] == pytest.approx(4 * 1e-4 * 2.0 * 2.0)
-    assert lo.volume(np.array([2.0]), np.array([np.inf]), 1.0, 5.0)[0] == 0.0
+def test_carter_volume_is_the_integral_of_the_leak_off_rate():
+    # independent of the implementation: integrate q = 2 faces x A x C_L / sqrt(t - t_wet)
+    # numerically (QUADPACK, with the inverse square-root end point as its weight)
+    coefficient, area, t_wet = 1e-4, 2.0, 1.0
+    lo = CarterLeakOff(coefficient)
+
+    def integral(t0: float, t1: float) -> float:
+        a = max(t0, t_wet)
+        value, _ = quad(lambda t: 2.0 * area * coefficient, a, t1, weight="alg", wvar=(-0.5, 0))
+        return (
+            value
+            if a == t_wet
+            else quad(lambda t: 2 * area * coefficient / np.sqrt(t - t_wet), a, t1)[0]
+        )
+
+    for t0, t1 in [(1.0, 5.0), (0.0, 3.0), (2.0, 2.5)]:
+        v = lo.volume(np.array([area]), np.array([t_wet]), t0, t1)[0]
+        assert v == pytest.approx(integral(t0, t1), rel=1e-9)
+    # additive over split intervals, nothing before the facet is wet
+    a = lo.volume(np.array([area]), np.array([t_wet]), 1.0, 3.0)[0]
+    b = lo.volume(np.array([area]), np.array([t_wet]), 3.0, 5.0)[0]
+    assert a + b == pytest.approx(lo.volume(np.array([area]), np.array([t_wet]), 1.0, 5.0)[0])
+    assert lo.volume(np.array([area]), np.array([np.inf]), 1.0, 5.0)[0] == 0.0
+    assert lo.volume(np.array([area]), np.array([4.0]), 1.0, 3.0)[0] == 0.0

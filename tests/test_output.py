@@ -2,6 +2,7 @@
 
 import json
 import os
+from pathlib import Path
 
 import pytest
 from mpi4py import MPI
@@ -21,18 +22,22 @@ def test_json_and_csv_round_trip(shared_tmp_path):
 
 
 @pytest.mark.serial
-def test_failed_write_keeps_the_previous_file(tmp_path):
+def test_failed_write_keeps_the_previous_file(tmp_path, monkeypatch):
     target = tmp_path / "summary.json"
     target.write_text("good\n")
+    real_replace = os.replace
 
-    class Boom:
-        def __str__(self):
-            raise RuntimeError("interrupted")
+    def interrupted(src, dst):
+        # the new text is fully written to the temporary file; the rename never happens
+        assert Path(src).read_text() == "new text"
+        raise KeyboardInterrupt("interrupted before the rename")
 
-    with pytest.raises(TypeError):
-        write_atomic(target, Boom())  # type: ignore[arg-type]
+    monkeypatch.setattr(os, "replace", interrupted)
+    with pytest.raises(KeyboardInterrupt, match="interrupted before the rename"):
+        write_atomic(target, "new text")
+    monkeypatch.setattr(os, "replace", real_replace)
     assert target.read_text() == "good\n"
-    assert os.listdir(tmp_path) == ["summary.json"]
+    assert os.listdir(tmp_path) == ["summary.json"]  # no temporary file left behind
 
 
 @pytest.mark.serial

@@ -1,0 +1,148 @@
+"""PETSc solver configuration and failure checks shared by every solver of hfcdem.
+
+Every KSP or SNES here carries an options prefix; the defaults given in code go
+into the PETSc options database only where the user (command line,
+``PETSC_OPTIONS``) has not set that name, and are removed after
+``setFromOptions`` so the global database holds only what the user put there.
+
+A failed solve raises :class:`SolverError` on every rank at once: the reason is
+reduced over the communicator before anyone raises, so no rank is left waiting
+in a collective that a failed rank never reaches.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+#: MUMPS LU for general systems.
+DIRECT_LU: dict[str, object] = {
+    "ksp_type": "preonly",
+    "pc_type": "lu",
+    "pc_factor_mat_solver_type": "mumps",
+}
+
+#: MUMPS LDL^T for symmetric systems (about half the time and memory of LU).
+DIRECT_CHOLESKY: dict[str, object] = {
+    "ksp_type": "preonly",
+    "pc_type": "cholesky",
+    "pc_factor_mat_solver_type": "mumps",
+}
+
+# MUMPS INFOG(1) codes worth a sentence (MUMPS 5 users' guide, section 8)
+_MUMPS_ERRORS = {
+    -5: "out of memory in the analysis",
+    -6: "the matrix is structurally singular",
+    -7: "out of memory",
+    -8: "the integer workspace is too small (raise mat_mumps_icntl_14)",
+    -9: "the real workspace is too small (raise mat_mumps_icntl_14)",
+    -10: "the matrix is numerically singular: a block may be free to move",
+    -13: "out of memory",
+    -17: "the workspace is too small (raise mat_mumps_icntl_14)",
+    -20: "the workspace is too small (raise mat_mumps_icntl_14)",
+}
+
+
+class SolverError(RuntimeError):
+    """A linear or nonlinear solve that did not converge (raised on every rank).
+
+    ``reason`` is PETSc's converged reason (negative), ``mumps_info`` MUMPS's
+    INFOG(1) when MUMPS factorised (0 when it succeeded, ``None`` otherwise).
+    """
+
+    def __init__(self, message: str, reason: int, mumps_info: int | None = None) -> None:
+        super().__init__(message)
+        self.reason = reason
+        self.mumps_info = mumps_info
+
+
+def reason_name(reason: int, kind: type = PETSc.KSP.ConvergedReason) -> str:
+    """Return the PETSc name of a converged reason, e.g. ``DIVERGED_PC_FAILED`` (-11)."""
+    for name in dir(kind):
+        if not name.startswith("_") and getattr(kind, name) == reason:
+            return f"{name} ({reason})"
+    return str(reason)
+
+
+@contextmanager
+def petsc_options(prefix: str, defaults: Mapping[str, object]) -> Iterator[None]:
+    """Put ``defaults`` under ``prefix`` into the options database for the block.
+
+    Names the user already set keep the user's value; the ones added here are
+    removed afterwards.
+    """
+    db = PETSc.Options()
+    ours = []
+    for key, value in defaults.items():
+        if not db.hasName(prefix + key):
+            db.setValue(prefix + key, value)
+            ours.append(prefix + key)
+    try:
+        yield
+    finally:
+        for name in ours:
+            db.delValue(name)
+
+
+def create_ksp(
+    A: PETSc.Mat, prefix: str, defaults: Mapping[str, object], comm: MPI.Comm | None = None
+) -> PETSc.KSP:
+    """Create a KSP on ``A`` configured from ``defaults`` and the options under ``prefix``."""
+    ksp = PETSc.KSP().create(A.comm if comm is None else comm)
+    ksp.setOptionsPrefix(prefix)
+    ksp.setOperators(A)
+    with petsc_options(prefix, defaults):
+        ksp.setFromOptions()
+    return ksp
+
+
+def mumps_info(ksp: PETSc.KSP) -> int | None:
+    """Return MUMPS's INFOG(1) for the factorisation behind ``ksp`` (None if not MUMPS)."""
+    try:
+        pc = ksp.getPC()
+        if pc.getType() not in ("lu", "cholesky"):
+            return None
+        if pc.getFactorSolverType() != "mumps":
+            return None
+        return int(pc.getFactorMatrix().getMumpsInfog(1))
+    except (PETSc.Error, AttributeError):
+        return None
+
+
+def check_ksp(ksp: PETSc.KSP, what: str, hint: str = "") -> None:
+    """Raise :class:`SolverError` on every rank if ``ksp``'s last solve failed.
+
+    The reason is reduced (minimum) over the KSP's communicator, so all ranks
+    agree; the message names the prefix, PETSc's reason and MUMPS's INFOG(1).
+    """
+    comm = ksp.comm.tompi4py()
+    reason = comm.allreduce(int(ksp.getConvergedReason()), op=MPI.MIN)
+    if reason >= 0:
+        return
+    local = mumps_info(ksp)
+    codes = comm.allgather(local)
+    info = min((c for c in codes if c is not None), default=None)
+    text = f"{what} (prefix {ksp.getOptionsPrefix()!r}) did not converge: PETSc reason "
+    text += reason_name(reason)
+    if info is not None:
+        text += f", MUMPS INFOG(1) = {info}"
+        if info in _MUMPS_ERRORS:
+            text += f" ({_MUMPS_ERRORS[info]})"
+    if hint:
+        text += f"; {hint}"
+    raise SolverError(text, reason, info)
+
+
+__all__ = [
+    "DIRECT_CHOLESKY",
+    "DIRECT_LU",
+    "SolverError",
+    "check_ksp",
+    "create_ksp",
+    "mumps_info",
+    "petsc_options",
+    "reason_name",
+]

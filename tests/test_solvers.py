@@ -1,0 +1,77 @@
+import pytest
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from hfcdem.solvers import (
+    DIRECT_LU,
+    SolverError,
+    check_ksp,
+    create_ksp,
+    petsc_options,
+    reason_name,
+)
+
+
+def diagonal(comm: MPI.Comm, values: list[float]) -> PETSc.Mat:
+    """A distributed diagonal matrix with the given entries (global order)."""
+    n = len(values)
+    A = PETSc.Mat().createAIJ((n, n), nnz=1, comm=comm)
+    lo, hi = A.getOwnershipRange()
+    for i in range(lo, hi):
+        A.setValue(i, i, values[i])
+    A.assemble()
+    return A
+
+
+def test_a_singular_factorisation_raises_on_every_rank_with_mumps_info(comm):
+    # a zero pivot on the last row: MUMPS reports it as numerically singular
+    A = diagonal(comm, [1.0] * 7 + [0.0])
+    ksp = create_ksp(A, "hfcdem_test_singular_", DIRECT_LU)
+    b = A.createVecLeft()
+    b.set(1.0)
+    x = A.createVecRight()
+    ksp.solve(b, x)
+    with pytest.raises(SolverError) as err:
+        check_ksp(ksp, "test solve", "a hint")
+    # every rank raised (the assertion block is reached on all), with the same cause
+    assert err.value.reason < 0
+    assert err.value.mumps_info is not None and err.value.mumps_info < 0
+    text = str(err.value)
+    assert "DIVERGED_PCSETUP_FAILED" in text and "INFOG(1)" in text and "a hint" in text
+    assert "hfcdem_test_singular_" in text
+    reasons = comm.allgather((err.value.reason, err.value.mumps_info))
+    assert len(set(reasons)) == 1
+    for obj in (ksp, A, b, x):
+        obj.destroy()
+
+
+def test_a_converged_solve_passes_the_check(comm):
+    A = diagonal(comm, [2.0] * 6)
+    ksp = create_ksp(A, "hfcdem_test_ok_", DIRECT_LU)
+    b = A.createVecLeft()
+    b.set(1.0)
+    x = A.createVecRight()
+    ksp.solve(b, x)
+    check_ksp(ksp, "test solve")
+    assert x.min()[1] == pytest.approx(0.5) and x.max()[1] == pytest.approx(0.5)
+    for obj in (ksp, A, b, x):
+        obj.destroy()
+
+
+def test_options_in_code_yield_to_the_users_and_leave_the_database_clean():
+    db = PETSc.Options()
+    db.setValue("hfcdem_test_opt_ksp_type", "cg")
+    try:
+        with petsc_options("hfcdem_test_opt_", {"ksp_type": "preonly", "pc_type": "lu"}):
+            assert db.getString("hfcdem_test_opt_ksp_type") == "cg"
+            assert db.getString("hfcdem_test_opt_pc_type") == "lu"
+        assert not db.hasName("hfcdem_test_opt_pc_type")
+        assert db.getString("hfcdem_test_opt_ksp_type") == "cg"
+    finally:
+        db.delValue("hfcdem_test_opt_ksp_type")
+
+
+def test_reason_names_are_petsc_names():
+    assert reason_name(-11).startswith("DIVERGED_PC")
+    assert reason_name(PETSc.KSP.ConvergedReason.DIVERGED_MAX_IT) == "DIVERGED_MAX_IT (-3)"
+    assert reason_name(12345) == "12345"
