@@ -41,7 +41,7 @@ from hfcdem.interfaces import (
 )
 from hfcdem.meshing import TaggedMesh
 from hfcdem.solid import ElasticMaterial, InSituStress, strain, stress
-from hfcdem.solvers import DIRECT_CHOLESKY, check_ksp, create_ksp
+from hfcdem.solvers import DIRECT_CHOLESKY, check_ksp, create_ksp, setup_factorisation
 
 # interior-facet integral ids
 _SPRING = 1  # intact, or broken and closed in stick: kn and ks
@@ -474,7 +474,11 @@ class CDEMSolid:
         a_form = dolfinx.fem.form(a)
         A = dolfinx.fem.petsc.assemble_matrix(a_form, bcs=self._bcs)
         A.assemble()
-        ksp = self._ksp(A)
+        if self.solver_kind == "direct":
+            # factorised here, with more room if MUMPS's dynamic scheduling needs it
+            ksp = setup_factorisation(lambda: self._ksp(A), self.comm)
+        else:
+            ksp = self._ksp(A)
         A.destroy()  # the KSP keeps its own reference
         self.solve_seconds += time.perf_counter() - t0
         return a_form, ksp

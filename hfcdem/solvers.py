@@ -12,7 +12,8 @@ in a collective that a failed rank never reaches.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+import sys
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 
 from mpi4py import MPI
@@ -112,6 +113,68 @@ def mumps_info(ksp: PETSc.KSP) -> int | None:
         return None
 
 
+#: INFOG(1) codes of a workspace that proved too small: a retry with more room helps
+WORKSPACE_ERRORS = (-8, -9, -17, -20)
+
+
+def retry_factorisation(
+    attempt: Callable[[int | None], int | None], tries: int = 3, first: int = 20
+) -> int | None:
+    """Factorise through ``attempt(relaxation)`` until MUMPS has room; return INFOG(1).
+
+    ``attempt`` factorises with MUMPS's ICNTL(14) (the percentage added to its
+    workspace estimate; ``None``: the configured value) and returns the INFOG(1)
+    reached on every rank (the minimum).  MUMPS schedules the parallel
+    factorisation dynamically, by the load of each process, so on a busy machine
+    a process may need more than the estimate: INFOG(1) = -9.  Each retry doubles
+    the relaxation, from ``first``.
+    """
+    info = attempt(None)
+    relaxation = first
+    for _ in range(tries):
+        if info not in WORKSPACE_ERRORS:
+            break
+        relaxation *= 2
+        info = attempt(relaxation)
+    return info
+
+
+def setup_factorisation(
+    make_ksp: Callable[[], PETSc.KSP], comm: MPI.Comm, tries: int = 3
+) -> PETSc.KSP:
+    """Create and set up a KSP from ``make_ksp``, refactorising with more MUMPS room if needed.
+
+    A KSP that is not a MUMPS factorisation is set up once.  The last KSP is
+    returned whatever happened; :func:`check_ksp` after its solve reports a
+    failure that remains.
+    """
+    box: list[PETSc.KSP] = []
+
+    def attempt(relaxation: int | None) -> int | None:
+        for old in box:
+            old.destroy()
+        box.clear()
+        ksp = make_ksp()
+        box.append(ksp)
+        if relaxation is not None:
+            if comm.rank == 0:
+                print(
+                    f"note: MUMPS ran out of workspace (busy machine?): refactorising with "
+                    f"ICNTL(14) = {relaxation} %",
+                    file=sys.stderr,
+                    flush=True,
+                )
+            pc = ksp.getPC()
+            pc.setFactorSetUpSolverType()
+            pc.getFactorMatrix().setMumpsIcntl(14, relaxation)
+        ksp.setUp()
+        codes = [c for c in comm.allgather(mumps_info(ksp)) if c is not None]
+        return min(codes) if codes else None
+
+    retry_factorisation(attempt, tries)
+    return box[0]
+
+
 def check_ksp(ksp: PETSc.KSP, what: str, hint: str = "") -> None:
     """Raise :class:`SolverError` on every rank if ``ksp``'s last solve failed.
 
@@ -139,10 +202,13 @@ def check_ksp(ksp: PETSc.KSP, what: str, hint: str = "") -> None:
 __all__ = [
     "DIRECT_CHOLESKY",
     "DIRECT_LU",
+    "WORKSPACE_ERRORS",
     "SolverError",
     "check_ksp",
     "create_ksp",
     "mumps_info",
     "petsc_options",
     "reason_name",
+    "retry_factorisation",
+    "setup_factorisation",
 ]

@@ -9,6 +9,8 @@ from hfcdem.solvers import (
     create_ksp,
     petsc_options,
     reason_name,
+    retry_factorisation,
+    setup_factorisation,
 )
 
 
@@ -75,3 +77,39 @@ def test_reason_names_are_petsc_names():
     assert reason_name(-11).startswith("DIVERGED_PC")
     assert reason_name(PETSc.KSP.ConvergedReason.DIVERGED_MAX_IT) == "DIVERGED_MAX_IT (-3)"
     assert reason_name(12345) == "12345"
+
+
+def test_a_workspace_too_small_is_retried_with_doubled_room():
+    # MUMPS returns -9 under load until the relaxation reaches 80 %
+    tried = []
+
+    def attempt(relaxation):
+        tried.append(relaxation)
+        return 0 if relaxation is not None and relaxation >= 80 else -9
+
+    assert retry_factorisation(attempt) == 0
+    assert tried == [None, 40, 80]
+
+
+def test_other_failures_and_successes_are_not_retried():
+    for code in (0, -10, None):
+        tried = []
+        assert retry_factorisation(lambda r, c=code, t=tried: t.append(r) or c) == code
+        assert tried == [None]
+    tried = []
+    assert retry_factorisation(lambda r: tried.append(r) or -9, tries=2) == -9
+    assert tried == [None, 40, 80]
+
+
+def test_setup_factorisation_gives_a_working_factorisation(comm):
+    A = diagonal(comm, [4.0] * 5)
+    ksp = setup_factorisation(lambda: create_ksp(A, "hfcdem_test_setup_", DIRECT_LU), comm)
+    assert ksp.getPC().getFactorMatrix().getMumpsInfog(1) == 0
+    b = A.createVecLeft()
+    b.set(1.0)
+    x = A.createVecRight()
+    ksp.solve(b, x)
+    check_ksp(ksp, "test solve")
+    assert x.max()[1] == pytest.approx(0.25)
+    for obj in (ksp, A, b, x):
+        obj.destroy()
