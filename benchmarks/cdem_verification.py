@@ -25,9 +25,8 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.cdem import CDEMSolid, Loads
-from hfcdem.interfaces import InterfaceModel
-from hfcdem.meshing import (
+from hfcdem.io.sampling import evaluate_at_points
+from hfcdem.mesh.tagged import (
     BoreholePlate,
     CrackPlate,
     PennyBlock,
@@ -35,8 +34,9 @@ from hfcdem.meshing import (
     create_crack_plate,
     create_penny_block,
 )
-from hfcdem.sampling import evaluate_at_points
-from hfcdem.solid import ElasticMaterial, InSituStress
+from hfcdem.solid.cdem import CDEMSolid, Loads
+from hfcdem.solid.elastic import ElasticMaterial, InSituStress
+from hfcdem.solid.interfaces import InterfaceModel
 
 MPa = 1e6
 E, NU, P, A = 210e9, 0.25, 22e6, 0.1

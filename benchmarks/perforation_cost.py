@@ -21,9 +21,9 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from hfcdem.run import build_fracture, build_solid, run_scene
-from hfcdem.scene import load_scene
-from hfcdem.scene_mesh import create_scene_mesh
+from hfcdem.config.scene import load_scene
+from hfcdem.mesh.build import create_scene_mesh
+from hfcdem.workflows.run import build_fracture, build_solid, run_scene
 
 SCENE = Path(__file__).resolve().parents[1] / "meshes/scenes/perforation_no2.toml"
 comm = MPI.COMM_WORLD
@@ -58,7 +58,7 @@ def main() -> None:
         solid = build_solid(scene, tmesh)
         frac = build_fracture(scene, solid)
         t2 = time.perf_counter()
-        frac._rebuild()  # one more event's worth of work: factorise and condense
+        frac.rebuild()  # one more event's worth of work: factorise and condense
         t3 = time.perf_counter()
         cells = tmesh.mesh.topology.index_map(3).size_global
         dofs = solid.V.dofmap.index_map.size_global * 3

@@ -16,12 +16,12 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from hfcdem.cdem import CDEMSolid
-from hfcdem.fluid import Fluid, Injection
-from hfcdem.hydrofrac import FlowSettings, HydraulicFracture
-from hfcdem.interfaces import InterfaceModel
-from hfcdem.meshing import BoreholePlate, create_borehole_plate
-from hfcdem.solid import ElasticMaterial, InSituStress
+from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
+from hfcdem.flow.fluid import Fluid, Injection
+from hfcdem.mesh.tagged import BoreholePlate, create_borehole_plate
+from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solid.elastic import ElasticMaterial, InSituStress
+from hfcdem.solid.interfaces import InterfaceModel
 
 A, SH, T0 = 0.03, 20e6, 5e6
 

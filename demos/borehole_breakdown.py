@@ -31,14 +31,14 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.cdem import CDEMSolid, Loads
 from hfcdem.info import versions
-from hfcdem.interfaces import FacetState, InterfaceModel
-from hfcdem.meshing import BoreholePlate, create_borehole_plate
-from hfcdem.output import prepare_output_dir, write_json, write_solid_results
-from hfcdem.plotting import plot_interface_states, render_field
-from hfcdem.sampling import interpolate_expression
-from hfcdem.solid import ElasticMaterial, InSituStress
+from hfcdem.io.files import prepare_output_dir, write_json, write_solid_results
+from hfcdem.io.plots import plot_interface_states, render_field
+from hfcdem.io.sampling import interpolate_expression
+from hfcdem.mesh.tagged import BoreholePlate, create_borehole_plate
+from hfcdem.solid.cdem import CDEMSolid, Loads
+from hfcdem.solid.elastic import ElasticMaterial, InSituStress
+from hfcdem.solid.interfaces import FacetState, InterfaceModel
 
 MPa = 1e6
 

@@ -25,10 +25,10 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from hfcdem.config.scene import load_scene
 from hfcdem.references import FIELD_FIRST_CRACK_S, FIELD_MEASURED, FIELD_PAPER_SIMULATED
-from hfcdem.run import OutputInUse, run_scene
-from hfcdem.scene import load_scene
-from hfcdem.study import breakdown_text
+from hfcdem.workflows.run import OutputInUse, run_scene
+from hfcdem.workflows.study import breakdown_text
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 

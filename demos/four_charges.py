@@ -4,7 +4,7 @@ Section 4 of the perforation paper: one perforation along SH from a 140 mm
 wellbore in a 2 m cube at 76/73/60 MPa (Sv/SH/Sh), water injected at 1e-7 m3/s.
 The four charges leave tunnels of different length and profile; the paper finds
 No. 2 (39 g DP3 HMX) breaking lowest and No. 3 highest.  Profiles No. 1, 3 and 4
-are ASSUMED from the paper's lengths (hfcdem/catalogue.py): their ordering is a
+are ASSUMED from the paper's lengths (hfcdem/config/catalogue.py): their ordering is a
 consequence of that assumption, not a reproduction.
 
 The cases run as a study (studies/four_charges.toml): with ``mpirun -n 2`` and
@@ -27,7 +27,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from hfcdem.references import CHARGE_NAMES, CHARGES
-from hfcdem.study import breakdown_text, load_study, pick_metric, run_study
+from hfcdem.workflows.study import breakdown_text, load_study, pick_metric, run_study
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 

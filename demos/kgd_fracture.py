@@ -28,14 +28,14 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
-from hfcdem.cdem import CDEMSolid
-from hfcdem.fluid import Fluid, Injection
-from hfcdem.hydrofrac import FlowSettings, HydraulicFracture
+from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
+from hfcdem.flow.fluid import Fluid, Injection
 from hfcdem.info import versions
-from hfcdem.interfaces import InterfaceModel
-from hfcdem.meshing import PathPlate, create_path_plate
-from hfcdem.output import prepare_output_dir, write_interfaces, write_json
-from hfcdem.solid import ElasticMaterial, InSituStress
+from hfcdem.io.files import prepare_output_dir, write_interfaces, write_json
+from hfcdem.mesh.tagged import PathPlate, create_path_plate
+from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solid.elastic import ElasticMaterial, InSituStress
+from hfcdem.solid.interfaces import InterfaceModel
 
 # seed 000, section 4.2: rock, water and the pump (per metre of fracture height)
 ROCK = ElasticMaterial(youngs_modulus=25e9, poisson_ratio=0.25)

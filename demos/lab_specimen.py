@@ -25,7 +25,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from hfcdem.references import LAB_MEASURED, LAB_PAPER_SIMULATED
-from hfcdem.study import breakdown_text, load_study, numeric, run_study
+from hfcdem.workflows.study import breakdown_text, load_study, numeric, run_study
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 

@@ -27,10 +27,10 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from hfcdem.config.scene import load_scene
 from hfcdem.references import CHARGES
-from hfcdem.run import OutputInUse, run_scene
-from hfcdem.scene import load_scene
-from hfcdem.study import breakdown_text
+from hfcdem.workflows.run import OutputInUse, run_scene
+from hfcdem.workflows.study import breakdown_text
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 

@@ -26,7 +26,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from hfcdem.references import SHAPE_ORDERINGS, SHAPES
-from hfcdem.study import breakdown_text, load_study, pick_metric, run_study
+from hfcdem.workflows.study import breakdown_text, load_study, pick_metric, run_study
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 

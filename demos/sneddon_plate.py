@@ -30,8 +30,8 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from hfcdem.run import OutputInUse, run_scene
-from hfcdem.scene import load_scene
+from hfcdem.config.scene import load_scene
+from hfcdem.workflows.run import OutputInUse, run_scene
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 

@@ -2,7 +2,7 @@
 
 Conventions: SI units; stresses *compression positive* (rock-mechanics sign), as
 in the references; ``theta`` is measured from the direction of SH.  The plane
-strain modulus is ``E' = E / (1 - nu^2)``.  Sources: design.md "Verification
+strain modulus is ``E' = E / (1 - nu^2)``.  Sources: docs/design.md "Verification
 references" and the seed papers (Sneddon, Kirsch, Hubbert-Willis, KGD).
 """
 
@@ -233,3 +233,27 @@ def equal_volume_cylinder_diameter(diameters: ArrayLike, stations: ArrayLike) ->
     z = np.asarray(stations, dtype=float)
     length = float(z[-1] - z[0])
     return float(2.0 * np.sqrt(frustum_volume(diameters, stations) / (np.pi * length)))
+
+
+__all__ = [
+    "ArrayLike",
+    "FloatArray",
+    "KGDState",
+    "KirschStress",
+    "equal_volume_cylinder_diameter",
+    "frustum_lateral_area",
+    "frustum_volume",
+    "haimson_fairhurst_breakdown",
+    "hubbert_willis_breakdown",
+    "kgd_toughness",
+    "kgd_viscosity",
+    "kirsch_stress",
+    "kirsch_wall_hoop_stress",
+    "penny_opening",
+    "penny_volume",
+    "plane_strain_modulus",
+    "radial_toughness_radius",
+    "sneddon_area",
+    "sneddon_opening",
+    "toughness_scale",
+]

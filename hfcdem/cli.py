@@ -42,10 +42,10 @@ def _scene_files(args: argparse.Namespace) -> list[Path]:
 def _mesh(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
-    from hfcdem.meshing import MeshingError
-    from hfcdem.scene import SceneError, load_scene
-    from hfcdem.scene_mesh import mesh_scene
-    from hfcdem.units import FieldError, parse_quantity
+    from hfcdem.config.scene import SceneError, load_scene
+    from hfcdem.config.units import FieldError, parse_quantity
+    from hfcdem.mesh.build import mesh_scene
+    from hfcdem.mesh.tagged import MeshingError
 
     comm = MPI.COMM_WORLD
 
@@ -90,7 +90,7 @@ def _overrides(items: list[str] | None) -> dict[str, object]:
     """Parse ``KEY=VALUE`` pairs; VALUE is a TOML value, or else taken as a string."""
     import tomllib
 
-    from hfcdem.scene import SceneError
+    from hfcdem.config.scene import SceneError
 
     out: dict[str, object] = {}
     for item in items or []:
@@ -107,10 +107,10 @@ def _overrides(items: list[str] | None) -> dict[str, object]:
 def _run(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
-    from hfcdem.meshing import MeshingError
-    from hfcdem.run import OutputInUse, run_scene
-    from hfcdem.scene import load_scene
-    from hfcdem.units import FieldError
+    from hfcdem.config.scene import load_scene
+    from hfcdem.config.units import FieldError
+    from hfcdem.mesh.tagged import MeshingError
+    from hfcdem.workflows.run import OutputInUse, run_scene
 
     comm = MPI.COMM_WORLD
 
@@ -147,8 +147,8 @@ def _run(args: argparse.Namespace) -> int:
 def _study(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
-    from hfcdem.study import load_study, run_study
-    from hfcdem.units import FieldError
+    from hfcdem.config.units import FieldError
+    from hfcdem.workflows.study import load_study, run_study
 
     comm = MPI.COMM_WORLD
 
@@ -240,3 +240,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return 2
     return int(args.func(args))
+
+
+__all__ = [
+    "build_parser",
+    "main",
+]

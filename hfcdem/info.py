@@ -34,3 +34,8 @@ def versions(comm: MPI.Comm = MPI.COMM_WORLD) -> dict[str, object]:
         "python": platform.python_version(),
         "ranks": comm.size,
     }
+
+
+__all__ = [
+    "versions",
+]

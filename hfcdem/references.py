@@ -3,7 +3,7 @@
 Breakdown pressures in MPa.  Section 5.2 of the paper quotes 68.75 MPa for
 Model 4-1 and 56.97 MPa for 4-2 while arguing that the longer tunnel breaks down
 lower; the values are swapped here (4-1, 280 mm long, at 56.97 MPa), as
-:mod:`hfcdem.catalogue` explains.
+:mod:`hfcdem.config.catalogue` explains.
 """
 
 from __future__ import annotations
@@ -50,3 +50,17 @@ SHAPE_ORDERINGS = (
     ("3-1", "3-2", "a wider near-well section lowers breakdown"),
     ("4-1", "4-2", "a longer tunnel lowers breakdown"),
 )
+
+
+__all__ = [
+    "CHARGES",
+    "CHARGE_NAMES",
+    "FIELD_FIRST_CRACK_S",
+    "FIELD_MEASURED",
+    "FIELD_PAPER_SIMULATED",
+    "LAB_MEASURED",
+    "LAB_PAPER_SIMULATED",
+    "SHAPES",
+    "SHAPE_FRACTURE_DEGREE",
+    "SHAPE_ORDERINGS",
+]

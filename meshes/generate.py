@@ -23,9 +23,9 @@ from pathlib import Path
 import gmsh
 from mpi4py import MPI
 
-from hfcdem.output import write_atomic
-from hfcdem.scene import load_scene
-from hfcdem.scene_mesh import mesh_scene
+from hfcdem.config.scene import load_scene
+from hfcdem.io.files import write_atomic
+from hfcdem.mesh.build import mesh_scene
 
 HERE = Path(__file__).resolve().parent
 REFERENCE = HERE / "reference_counts.json"

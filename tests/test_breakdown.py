@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from hfcdem.breakdown import detect_breakdown
+from hfcdem.workflows.breakdown import detect_breakdown
 
 
 def test_peak_then_sustained_drop():

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from hfcdem import catalogue
 from hfcdem.analytic import equal_volume_cylinder_diameter, frustum_volume
+from hfcdem.config import catalogue
 
 NO2_D = (33.44, 33.33, 28.80, 23.50, 48.77, 50.00)
 NO2_L = (50.0, 50.0, 50.0, 50.0, 30.0)

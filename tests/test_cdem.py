@@ -10,9 +10,8 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.cdem import CDEMSolid, Loads
-from hfcdem.interfaces import FacetState, InterfaceModel
-from hfcdem.meshing import (
+from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
+from hfcdem.mesh.tagged import (
     BoreholePlate,
     CrackPlate,
     PennyBlock,
@@ -20,8 +19,9 @@ from hfcdem.meshing import (
     create_crack_plate,
     create_penny_block,
 )
-from hfcdem.sampling import evaluate_at_points, interpolate_expression
-from hfcdem.solid import ElasticMaterial, InSituStress
+from hfcdem.solid.cdem import CDEMSolid, Loads
+from hfcdem.solid.elastic import ElasticMaterial, InSituStress
+from hfcdem.solid.interfaces import FacetState, InterfaceModel
 
 MPa = 1e6
 E, NU, P, A = 210e9, 0.25, 22e6, 0.1  # Table 1 of the perforation paper
@@ -286,7 +286,7 @@ def test_iterative_solver_matches_direct():
 def test_sliver_elements_solve_finite_or_stop_clearly():
     import dolfinx
 
-    from hfcdem.meshing import TaggedMesh
+    from hfcdem.mesh.tagged import TaggedMesh
 
     comm = MPI.COMM_WORLD
     mesh = dolfinx.mesh.create_unit_square(
@@ -348,7 +348,7 @@ def test_coulomb_friction_on_a_closed_crack_matches_mode_ii_slip(friction_angle)
     # normal stress 20 MPa (SH 30, Sh 10 MPa at 45 deg).  Where tau0 > mu sigma_n it
     # slips, and the slip is that of a mode-II crack under the stress drop
     # tau0 - mu sigma_n: 4 (tau0 - mu sigma_n) a / E'.  Otherwise it sticks.
-    from hfcdem.cdem import SLIP, STICK
+    from hfcdem.solid.cdem import SLIP, STICK
 
     a, e, nu = A, 21.5e9, 0.25
     tmesh = create_crack_plate(CrackPlate(a, 30 * a, a / 20, 6 * a, half_model=False))

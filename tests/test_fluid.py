@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from hfcdem.fluid import CarterLeakOff, Fluid, Injection
+from hfcdem.flow.fluid import CarterLeakOff, Fluid, Injection
 
 
 def test_cubic_law():

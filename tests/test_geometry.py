@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from hfcdem import geometry
-from hfcdem.meshing import MeshingError
-from hfcdem.scene import Profile, load_scene, parse_scene, tunnel_extension
-from hfcdem.scene_mesh import create_scene_mesh, measure_mesh
+from hfcdem.config.scene import Profile, load_scene, parse_scene, tunnel_extension
+from hfcdem.mesh import block as geometry
+from hfcdem.mesh.build import create_scene_mesh, measure_mesh
+from hfcdem.mesh.tagged import MeshingError
 
 SCENES = Path(__file__).resolve().parents[1] / "meshes" / "scenes"
 
@@ -69,7 +69,7 @@ def _facet_points(tmesh, name):
 def _check_tags_on_surfaces(sm):
     """Every tagged facet's vertices lie on the analytic surface its name says."""
     geom = sm.scene.geometry
-    residuals = {name: res for name, _, res in geometry._face_candidates(geom)}
+    residuals = {name: res for name, _, res in geometry.face_candidates(geom)}
     scale = float(np.max(geom.block.size))
     worst = 0.0
     for name in sm.tmesh.facet_names:

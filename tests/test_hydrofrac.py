@@ -11,13 +11,13 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
-from hfcdem.breakdown import detect_breakdown
-from hfcdem.cdem import CDEMSolid
-from hfcdem.fluid import CarterLeakOff, Fluid, Injection
-from hfcdem.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
-from hfcdem.interfaces import InterfaceModel
-from hfcdem.meshing import BoreholePlate, PathPlate, create_borehole_plate, create_path_plate
-from hfcdem.solid import ElasticMaterial, InSituStress
+from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
+from hfcdem.flow.fluid import CarterLeakOff, Fluid, Injection
+from hfcdem.mesh.tagged import BoreholePlate, PathPlate, create_borehole_plate, create_path_plate
+from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solid.elastic import ElasticMaterial, InSituStress
+from hfcdem.solid.interfaces import InterfaceModel
+from hfcdem.workflows.breakdown import detect_breakdown
 
 # seed 000 section 4.2: E 25 GPa, nu 0.25, water, Q0 = 4 kg/s per metre (half model: 2)
 ROCK = ElasticMaterial(25e9, 0.25)
@@ -251,10 +251,10 @@ def test_permeated_joints_follow_the_open_cracks():
         while hf.t < 30.0:
             hf.step()
     # the wall joints are the same; permeation adds the joints along the new cracks
-    assert wet._wall_joints.sum() < perm._wall_joints.sum()
-    ids = np.union1d(perm._cavity_vertices, perm.net.keys[perm.is_open > 0].reshape(-1))
+    assert wet.wall_joints.sum() < perm.wall_joints.sum()
+    ids = np.union1d(perm.cavity_vertices, perm.net.keys[perm.is_open > 0].reshape(-1))
     touching = np.isin(perm.solid.vertex_ids, ids).sum(axis=1) >= 1
-    assert np.all(touching[perm._wall_joints])
+    assert np.all(touching[perm.wall_joints])
     # with fluid ahead of it more of the rock breaks in tension (143 against 66 facets)
     assert perm.history[-1].tensile > 1.5 * wet.history[-1].tensile
 

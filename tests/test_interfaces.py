@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from hfcdem.interfaces import (
+from hfcdem.solid.interfaces import (
     FacetState,
     InterfaceModel,
     check_failure,

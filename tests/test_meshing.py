@@ -6,7 +6,7 @@ import pytest
 import ufl
 from mpi4py import MPI
 
-from hfcdem.meshing import BoreholePlate, MeshingError, create_borehole_plate, mesh_from_gmsh
+from hfcdem.mesh.tagged import BoreholePlate, MeshingError, create_borehole_plate, mesh_from_gmsh
 
 
 def _measure(tmesh, name=None):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from hfcdem.network import CAVITY, build_network
+from hfcdem.flow.network import CAVITY, build_network
 
 
 def _line_network(comm):

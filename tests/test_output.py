@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from mpi4py import MPI
 
-from hfcdem.output import prepare_output_dir, write_atomic, write_csv, write_json
+from hfcdem.io.files import prepare_output_dir, write_atomic, write_csv, write_json
 
 
 def test_json_and_csv_round_trip(shared_tmp_path):

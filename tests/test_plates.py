@@ -8,9 +8,9 @@ import pytest
 import ufl
 from mpi4py import MPI
 
-from hfcdem import plates
-from hfcdem.scene import load_scene, parse_scene
-from hfcdem.scene_mesh import create_scene_mesh, measure_mesh
+from hfcdem.config.scene import load_scene, parse_scene
+from hfcdem.mesh import plates
+from hfcdem.mesh.build import create_scene_mesh, measure_mesh
 
 SCENES = Path(__file__).resolve().parents[1] / "meshes" / "scenes"
 

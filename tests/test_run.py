@@ -7,9 +7,9 @@ from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
 from hfcdem.cli import main
-from hfcdem.run import OutputInUse, pressurised_groups, run_scene
-from hfcdem.scene import SceneError, load_scene, parse_scene
-from hfcdem.series import _read_pvd
+from hfcdem.config.scene import SceneError, load_scene, parse_scene
+from hfcdem.io.series import read_pvd
+from hfcdem.workflows.run import OutputInUse, pressurised_groups, run_scene
 
 KGD = "meshes/scenes/kgd_strip.toml"
 
@@ -85,7 +85,7 @@ def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
     scene, straight, out = _straight_and_stopped(shared_tmp_path)
     kept = (out / "history.csv").read_text().splitlines()
     assert 2 < len(kept) < len((straight / "history.csv").read_text().splitlines())
-    frames_before = _read_pvd(out / "interfaces.pvd")
+    frames_before = read_pvd(out / "interfaces.pvd")
     summary = run_scene(scene, out, resume=True)
     assert summary["simulated_time_s"] == pytest.approx(10.0)
     # what happened before the stop is still counted
@@ -94,10 +94,10 @@ def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
     assert summary["initial_failures"] == first["initial_failures"]
     assert summary["rebuilds"] >= first["rebuilds"]
     # the interface frames written before the stop are kept, the series goes on
-    frames = _read_pvd(out / "interfaces.pvd")
+    frames = read_pvd(out / "interfaces.pvd")
     assert frames[: len(frames_before)] == frames_before
     assert [t for t, _ in frames] == pytest.approx(
-        [t for t, _ in _read_pvd(straight / "interfaces.pvd")]
+        [t for t, _ in read_pvd(straight / "interfaces.pvd")]
     )
     assert (out / "fields_resumed.bp").is_dir()
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from hfcdem.sampling import evaluate_at_points
+from hfcdem.io.sampling import evaluate_at_points
 
 
 def _mesh(comm):

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from hfcdem import catalogue
-from hfcdem.scene import (
+from hfcdem.config import catalogue
+from hfcdem.config.scene import (
     BoreholeSquare,
     CrackPlate,
     KGDStrip,

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from hfcdem import geometry, plates
-from hfcdem.scene import PerforatedBlock, load_scene
-from hfcdem.scene_mesh import create_scene_mesh, measure_mesh, mesh_report
+from hfcdem.config.scene import PerforatedBlock, load_scene
+from hfcdem.mesh import block as geometry
+from hfcdem.mesh import plates
+from hfcdem.mesh.build import create_scene_mesh, measure_mesh, mesh_report
 
 SCENES = Path(__file__).resolve().parents[1] / "meshes" / "scenes"
 SCENE_FILES = sorted(SCENES.glob("*.toml"))
@@ -19,8 +20,8 @@ REFERENCE = json.loads((SCENES.parent / "reference_counts.json").read_text())
 
 def _residuals(geom):
     if isinstance(geom, PerforatedBlock):
-        return {name: res for name, _, res in geometry._face_candidates(geom)}, max(geom.block.size)
-    return dict(plates._curve_candidates(geom)), max(geom.plate.width, geom.plate.height)
+        return {name: res for name, _, res in geometry.face_candidates(geom)}, max(geom.block.size)
+    return dict(plates.curve_candidates(geom)), max(geom.plate.width, geom.plate.height)
 
 
 def _worst_offset(sm):

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from hfcdem.scene import SceneError, parse_scene
+from hfcdem.config.scene import SceneError, parse_scene
 
 GEOMETRY = {"catalogue": "borehole_plate"}
 PHYSICS = {

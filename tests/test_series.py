@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from hfcdem.series import _pvd, _read_pvd, output_times
+from hfcdem.io.series import output_times, pvd_text, read_pvd
 
 
 def test_output_times_cover_the_run_and_end_on_its_end():
@@ -17,6 +17,6 @@ def test_output_times_cover_the_run_and_end_on_its_end():
 def test_pvd_round_trips(tmp_path):
     frames = [(0.0, "interfaces/frame_0000.vtu"), (2.5, "interfaces/frame_0001.vtu")]
     path = tmp_path / "interfaces.pvd"
-    path.write_text(_pvd(frames))
-    assert _read_pvd(path) == frames
-    assert _read_pvd(tmp_path / "missing.pvd") == []
+    path.write_text(pvd_text(frames))
+    assert read_pvd(path) == frames
+    assert read_pvd(tmp_path / "missing.pvd") == []

@@ -5,9 +5,9 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.meshing import BoreholePlate, create_borehole_plate
-from hfcdem.sampling import evaluate_at_points, interpolate_expression
-from hfcdem.solid import ElasticMaterial, InSituStress, solve_cavity_pressure
+from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
+from hfcdem.mesh.tagged import BoreholePlate, create_borehole_plate
+from hfcdem.solid.elastic import ElasticMaterial, InSituStress, solve_cavity_pressure
 
 MPa = 1e6
 ROCK = ElasticMaterial(21.5e9, 0.25)

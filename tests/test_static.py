@@ -7,8 +7,8 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem.cli import main
-from hfcdem.run import run_scene
-from hfcdem.scene import SceneError, load_scene
+from hfcdem.config.scene import SceneError, load_scene
+from hfcdem.workflows.run import run_scene
 
 SNEDDON = "meshes/scenes/sneddon_plate.toml"
 

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from hfcdem.units import FieldError, UnitError, format_quantity, join_path, parse_quantity
+from hfcdem.config.units import FieldError, UnitError, format_quantity, join_path, parse_quantity
 
 
 @pytest.mark.parametrize(

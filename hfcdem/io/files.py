@@ -7,11 +7,13 @@ truncated ``summary.json`` over a good one.
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 import os
 import tempfile
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +22,7 @@ import numpy as np
 from dolfinx.io import XDMFFile
 from mpi4py import MPI
 
-from hfcdem.meshing import TaggedMesh
+from hfcdem.mesh.tagged import TaggedMesh
 
 
 def prepare_output_dir(path: str | os.PathLike[str], comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
@@ -40,20 +42,20 @@ def prepare_output_dir(path: str | os.PathLike[str], comm: MPI.Comm = MPI.COMM_W
     return out
 
 
-def _to_builtin(value: Any, strict: bool = False) -> Any:
+def to_builtin(value: Any, strict: bool = False) -> Any:
     """Return ``value`` as JSON-ready builtins (mappings, sequences, NumPy values, paths).
 
     ``strict``: non-finite floats become strings and any other object its repr,
     so the result is plain JSON whatever went in.
     """
     if isinstance(value, Mapping):
-        return {str(k): _to_builtin(v, strict) for k, v in value.items()}
+        return {str(k): to_builtin(v, strict) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [_to_builtin(v, strict) for v in value]
+        return [to_builtin(v, strict) for v in value]
     if isinstance(value, np.ndarray):
-        return _to_builtin(value.tolist(), strict)
+        return to_builtin(value.tolist(), strict)
     if isinstance(value, np.generic):
-        return _to_builtin(value.item(), strict)
+        return to_builtin(value.item(), strict)
     if isinstance(value, Path):
         return str(value)
     if strict:
@@ -84,7 +86,7 @@ def write_json(
 ) -> None:
     """Write ``data`` as indented JSON from rank 0 (atomically)."""
     if comm.rank == 0:
-        write_atomic(path, json.dumps(_to_builtin(data), indent=2, allow_nan=True) + "\n")
+        write_atomic(path, json.dumps(to_builtin(data), indent=2, allow_nan=True) + "\n")
     comm.barrier()
 
 
@@ -169,7 +171,7 @@ def write_solid_results(out: Path, solid: Any, loads: Any, t: float = 0.0) -> di
     Interfaces: failure state (0 intact, 1 tensile, 2 shear), opening (m),
     normal and shear traction (MPa) per facet of the fracturable zone and cracks.
     """
-    from hfcdem.sampling import interpolate_expression
+    from hfcdem.io.sampling import interpolate_expression
 
     mesh, gdim = solid.mesh, solid.gdim
     u1 = interpolate_expression(solid.u, mesh, ("DG", 1, (gdim,)), "displacement")
@@ -193,3 +195,53 @@ def write_solid_results(out: Path, solid: Any, loads: Any, t: float = 0.0) -> di
         solid.comm,
     )
     return paths
+
+
+@dataclass(frozen=True)
+class Results:
+    """What a finished (or stopped) run left in its output directory.
+
+    ``summary``: ``summary.json`` as a dict; ``history``: the columns of
+    ``history.csv`` as float arrays (empty for a static run).
+    """
+
+    directory: Path
+    summary: dict[str, Any]
+    history: dict[str, np.ndarray]
+
+
+def read_results(path: str | os.PathLike[str]) -> Results:
+    """Read ``summary.json`` and ``history.csv`` of a run directory (any rank)."""
+    out = Path(path)
+    summary_file = out / "summary.json"
+    if not summary_file.exists():
+        raise FileNotFoundError(
+            f"{out}: no summary.json (not a run directory, or the run has not finished)"
+        )
+    summary = json.loads(summary_file.read_text())
+    history: dict[str, np.ndarray] = {}
+    history_file = out / "history.csv"
+    if history_file.exists():
+        with history_file.open(newline="") as fh:
+            rows = list(csv.reader(fh))
+        if rows:
+            columns = list(zip(*rows[1:], strict=True)) if len(rows) > 1 else [()] * len(rows[0])
+            history = {
+                name: np.array([float(v) for v in col])
+                for name, col in zip(rows[0], columns, strict=True)
+            }
+    return Results(out, summary, history)
+
+
+__all__ = [
+    "Results",
+    "prepare_output_dir",
+    "read_results",
+    "write_atomic",
+    "write_csv",
+    "write_fields",
+    "write_interfaces",
+    "write_json",
+    "write_solid_results",
+    "write_vtx",
+]

@@ -64,3 +64,9 @@ def evaluate_at_points(f: dolfinx.fem.Function, points: npt.ArrayLike) -> np.nda
     total = np.empty_like(values)
     comm.Allreduce(values, total, op=MPI.SUM)
     return total
+
+
+__all__ = [
+    "evaluate_at_points",
+    "interpolate_expression",
+]

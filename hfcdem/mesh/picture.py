@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from hfcdem.plotting import ensure_display
-from hfcdem.scene import PerforatedBlock, Scene, axis_vector
+from hfcdem.config.scene import PerforatedBlock, Scene, axis_vector
+from hfcdem.io.plots import ensure_display
 
 _WALL_PREFIXES = ("wellbore_wall", "perforation_")
 _LINE_TAGS = {"crack": "red", "fracture_path": "orange", "wellbore_wall": "red"}
@@ -154,3 +154,8 @@ def _render_2d(plotter: Any, points: np.ndarray, blocks: dict, names: dict, scen
             plotter.camera.position = (cx, cy, 2.5 * zoom)
             plotter.camera.up = (0.0, 1.0, 0.0)
             plotter.reset_camera_clipping_range()
+
+
+__all__ = [
+    "render_mesh",
+]

@@ -1,7 +1,7 @@
 """Run a static scene: one solve of the CDEM solid under a pressure held in its crack.
 
 A scene with a ``[load]`` section instead of ``[injection]`` (see
-:mod:`hfcdem.scene_physics`) is solved once: no fluid flows, the pressure acts
+:mod:`hfcdem.config.physics`) is solved once: no fluid flows, the pressure acts
 on both faces of the pre-existing crack (tag ``crack``) and the in-situ stress
 acts everywhere.  The springs hold whatever the load, which is what a
 comparison with an elastic solution needs; the summary counts the springs
@@ -30,12 +30,12 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.cdem import CDEMSolid, Loads
-from hfcdem.interfaces import FacetState
-from hfcdem.output import write_csv, write_json
-from hfcdem.sampling import evaluate_at_points
-from hfcdem.scene import CrackPlate, Scene, SceneError
-from hfcdem.series import FieldSeries
+from hfcdem.config.scene import CrackPlate, Scene, SceneError
+from hfcdem.io.files import write_csv, write_json
+from hfcdem.io.sampling import evaluate_at_points
+from hfcdem.io.series import FieldSeries
+from hfcdem.solid.cdem import CDEMSolid, Loads
+from hfcdem.solid.interfaces import FacetState
 
 MONITORING_POINTS = 11  # along the crack, tips included (the paper's Fig. 6)
 
@@ -213,3 +213,12 @@ def _plot_opening(
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+__all__ = [
+    "MONITORING_POINTS",
+    "StaticState",
+    "compare_sneddon",
+    "crack_face_displacement",
+    "run_static",
+]

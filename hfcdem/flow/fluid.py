@@ -137,3 +137,10 @@ class CarterLeakOff:
         start = np.maximum(t0 - wetted_since, 0.0)
         end = np.maximum(t1 - wetted_since, 0.0)
         return 4.0 * self.coefficient * area * (np.sqrt(end) - np.sqrt(start))
+
+
+__all__ = [
+    "CarterLeakOff",
+    "Fluid",
+    "Injection",
+]

@@ -1,11 +1,11 @@
 """Mesh a scene and check the mesh: files for ParaView, a picture and ``mesh_report.json``.
 
 :func:`create_scene_mesh` runs Gmsh on rank 0 (through
-:func:`hfcdem.meshing.mesh_from_gmsh`) and distributes the mesh with
+:func:`hfcdem.mesh.tagged.mesh_from_gmsh`) and distributes the mesh with
 shared-facet ghosting.  :func:`measure_mesh` integrates over the distributed
 mesh with DOLFINx (volumes by ``1 dx``, wall areas by ``1 ds`` over each facet
-tag) and compares with the analytic values of :mod:`hfcdem.geometry` and
-:mod:`hfcdem.plates`.  A tunnel's own volume is measured by the divergence
+tag) and compares with the analytic values of :mod:`hfcdem.mesh.block` and
+:mod:`hfcdem.mesh.plates`.  A tunnel's own volume is measured by the divergence
 theorem over its wall and tip with the field ``F = (a - sqrt(R^2 - t^2)) d``
 (``a``, ``t`` coordinates along the tunnel axis ``d`` and across it, from
 the wellbore axis): ``div F = 1`` and ``F`` vanishes on the wellbore wall, so
@@ -27,10 +27,12 @@ import ufl
 from dolfinx.io import XDMFFile
 from mpi4py import MPI
 
-from hfcdem import catalogue, geometry, plates
-from hfcdem.meshing import TaggedMesh, mesh_from_gmsh
-from hfcdem.output import prepare_output_dir, write_json
-from hfcdem.scene import PerforatedBlock, Scene
+from hfcdem.config import catalogue
+from hfcdem.config.scene import PerforatedBlock, Scene
+from hfcdem.io.files import prepare_output_dir, write_json
+from hfcdem.mesh import block as geometry
+from hfcdem.mesh import plates
+from hfcdem.mesh.tagged import TaggedMesh, mesh_from_gmsh
 
 
 @dataclass(frozen=True)
@@ -287,7 +289,7 @@ def mesh_scene(
         png = out / f"{scene.name}.png"
         if comm.rank == 0:
             try:
-                from hfcdem.mesh_picture import render_mesh
+                from hfcdem.mesh.picture import render_mesh
 
                 render_mesh(msh, png, scene)
             except Exception as exc:  # a missing display must not lose the mesh
@@ -300,3 +302,13 @@ def mesh_scene(
         report["picture_error"] = problem
     write_json(out / "mesh_report.json", report, comm)
     return report
+
+
+__all__ = [
+    "SceneMesh",
+    "create_scene_mesh",
+    "measure_mesh",
+    "mesh_report",
+    "mesh_scene",
+    "write_xdmf",
+]

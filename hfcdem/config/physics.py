@@ -3,7 +3,7 @@
 Every dimensional value carries its unit (``"21.5 GPa"``, ``"1e-7 m3/s"``);
 fields left out take the defaults below, and :attr:`Physics.defaulted` lists
 them so a run's record can print what was assumed.  Any invalid field raises
-:class:`~hfcdem.scene.SceneError` naming it, before anything is meshed.
+:class:`~hfcdem.config.scene.SceneError` naming it, before anything is meshed.
 
 .. code-block:: toml
 
@@ -40,7 +40,7 @@ them so a run's record can print what was assumed.  Any invalid field raises
 
     [load]                      # instead of [injection]: one static solve
     crack_pressure = "22 MPa"   # on the faces of the pre-existing crack (tag 'crack');
-                                # the springs stay elastic (hfcdem.static)
+                                # the springs stay elastic (hfcdem.workflows.static)
 
     [output]
     interval = "5 s"            # fields over time (default: 20 frames per run)
@@ -67,9 +67,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from hfcdem.fluid import Fluid, Injection
-from hfcdem.interfaces import InterfaceModel
-from hfcdem.solid import ElasticMaterial, InSituStress
+from hfcdem.flow.fluid import Fluid, Injection
+from hfcdem.solid.elastic import ElasticMaterial, InSituStress
+from hfcdem.solid.interfaces import InterfaceModel
 
 PHYSICS_SECTIONS = ("rock", "stress", "fluid", "injection", "load", "solver", "output")
 
@@ -140,12 +140,12 @@ class Physics:
 
 def parse_physics(data: Mapping[str, Any]) -> Physics:
     """Read the physics sections of a parsed scene document (see the module docstring)."""
-    from hfcdem.scene import SceneError, _Table
+    from hfcdem.config.scene import SceneError, TomlTable
 
     defaulted: list[str] = []
 
     def section(name: str) -> Any:
-        return _Table(data.get(name, {}), name)
+        return TomlTable(data.get(name, {}), name)
 
     def get(table: Any, key: str, kind: str, default: Any, **kw: Any) -> Any:
         if not table.has(key):
@@ -229,7 +229,7 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
         else:
             points = inj.raw(given[0])
             dim = "flow_rate" if given[0] == "rate_schedule" else "stress"
-            from hfcdem.units import parse_quantity
+            from hfcdem.config.units import parse_quantity
 
             check(
                 isinstance(points, list) and len(points) > 0, inj.sub(given[0]), "expected a list"
@@ -348,3 +348,12 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
         )
     except ValueError as exc:  # a range the dataclasses check themselves
         raise SceneError("", str(exc)) from None
+
+
+__all__ = [
+    "PHYSICS_SECTIONS",
+    "Physics",
+    "SolverSettings",
+    "StaticLoad",
+    "parse_physics",
+]

@@ -26,7 +26,7 @@ import numpy as np
 import ufl
 from petsc4py import PETSc
 
-from hfcdem.meshing import TaggedMesh
+from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solvers import DIRECT_LU, check_ksp, create_ksp
 
 

@@ -153,3 +153,14 @@ def format_quantity(value: float, unit: str, digits: int = 4) -> str:
     if dim is None:
         raise ValueError(f"unknown unit {unit!r}")
     return f"{value / UNITS[dim][unit]:.{digits}g} {unit}"
+
+
+__all__ = [
+    "EXAMPLES",
+    "UNITS",
+    "FieldError",
+    "UnitError",
+    "format_quantity",
+    "join_path",
+    "parse_quantity",
+]

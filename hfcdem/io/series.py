@@ -16,11 +16,11 @@ from typing import Any
 import dolfinx
 import numpy as np
 
-from hfcdem.output import write_atomic, write_interfaces
+from hfcdem.io.files import write_atomic, write_interfaces
 
 
 class FieldSeries:
-    """Write the state of a :class:`~hfcdem.hydrofrac.HydraulicFracture` at chosen times.
+    """Write the state of a :class:`~hfcdem.coupling.hydrofrac.HydraulicFracture` at chosen times.
 
     ``resume_from``: the simulated time a resumed run starts at; frames written
     before it are kept and the solid fields go to ``fields_resumed.bp``.
@@ -49,7 +49,7 @@ class FieldSeries:
         if self.comm.rank == 0:
             (out / "interfaces").mkdir(exist_ok=True)
         if resume_from is not None and self.comm.rank == 0:
-            self.frames = [f for f in _read_pvd(out / "interfaces.pvd") if f[0] <= resume_from]
+            self.frames = [f for f in read_pvd(out / "interfaces.pvd") if f[0] <= resume_from]
         self.frames = self.comm.bcast(self.frames, root=0)
         self.comm.barrier()
 
@@ -65,7 +65,7 @@ class FieldSeries:
         write_interfaces(self.out / name, points, data, self.comm)
         self.frames.append((t, name))
         if self.comm.rank == 0:
-            write_atomic(self.out / "interfaces.pvd", _pvd(self.frames))
+            write_atomic(self.out / "interfaces.pvd", pvd_text(self.frames))
         self.comm.barrier()
 
     def close(self) -> None:
@@ -73,7 +73,7 @@ class FieldSeries:
         self._writer.close()
 
 
-def _pvd(frames: list[tuple[float, str]]) -> str:
+def pvd_text(frames: list[tuple[float, str]]) -> str:
     rows = "\n".join(
         f'    <DataSet timestep="{t:.10g}" group="" part="0" file="{name}"/>' for t, name in frames
     )
@@ -83,7 +83,7 @@ def _pvd(frames: list[tuple[float, str]]) -> str:
     )
 
 
-def _read_pvd(path: Path) -> list[tuple[float, str]]:
+def read_pvd(path: Path) -> list[tuple[float, str]]:
     import re
 
     if not path.exists():
@@ -103,3 +103,9 @@ def output_times(t_start: float, t_end: float, interval: float) -> np.ndarray:
     if not len(times) or times[-1] < t_end * (1 - 1e-12):
         times = np.append(times, t_end)
     return times
+
+
+__all__ = [
+    "FieldSeries",
+    "output_times",
+]

@@ -36,10 +36,10 @@ from typing import Any
 
 from mpi4py import MPI
 
-from hfcdem.output import prepare_output_dir
-from hfcdem.scene import Scene, SceneError, parse_scene
-from hfcdem.scene import set_field as _set
-from hfcdem.units import UNITS, FieldError, parse_quantity
+from hfcdem.config.scene import Scene, SceneError, parse_scene
+from hfcdem.config.scene import set_field as _set
+from hfcdem.config.units import UNITS, FieldError, parse_quantity
+from hfcdem.io.files import prepare_output_dir
 
 
 @dataclass(frozen=True)
@@ -187,7 +187,7 @@ def run_study(
     say: Callable[[str], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Run every case not already done; return one result row per case."""
-    from hfcdem.run import run_scene, scene_fingerprint
+    from hfcdem.workflows.run import run_scene, scene_fingerprint
 
     if not 1 <= groups <= comm.size:
         raise ValueError(f"groups must be in [1, {comm.size}] (the rank count), got {groups}")
@@ -303,7 +303,7 @@ def _num(v: Any) -> float:
 
 
 def _write_table(path: Path, rows: list[dict[str, Any]], cols: list[str]) -> None:
-    from hfcdem.output import write_atomic
+    from hfcdem.io.files import write_atomic
 
     lines = [",".join(["value", *cols])]
     for r in rows:
@@ -345,3 +345,15 @@ def _label_axes(axes: Any, study: Study, rows: list[dict[str, Any]], xs: list, c
         if categorical:
             ax.set_xticks(xs, [str(r["value"]) for r in rows])
         ax.grid(alpha=0.3)
+
+
+__all__ = [
+    "STATIC_COLUMNS",
+    "Study",
+    "breakdown_text",
+    "case_directory",
+    "load_study",
+    "numeric",
+    "pick_metric",
+    "run_study",
+]

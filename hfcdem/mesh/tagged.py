@@ -487,3 +487,18 @@ class PennyBlock:
 def create_penny_block(block: PennyBlock, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
     """Mesh ``block`` on rank 0 and distribute it over ``comm``."""
     return mesh_from_gmsh(block.build, comm, gdim=3, name="penny_block")
+
+
+__all__ = [
+    "BoreholePlate",
+    "CrackPlate",
+    "MeshingError",
+    "PathPlate",
+    "PennyBlock",
+    "TaggedMesh",
+    "create_borehole_plate",
+    "create_crack_plate",
+    "create_path_plate",
+    "create_penny_block",
+    "mesh_from_gmsh",
+]

@@ -8,7 +8,7 @@ Its state is one of
   closed faces resist interpenetration and slide with Coulomb friction.
 
 These numbers are what the output writes (the paper's Fig. 17 uses 0/1/2).
-This module is plain NumPy: the DOLFINx side lives in :mod:`hfcdem.cdem`.
+This module is plain NumPy: the DOLFINx side lives in :mod:`hfcdem.solid.cdem`.
 Tractions are *tension positive*; strengths are positive numbers.
 """
 
@@ -187,3 +187,15 @@ def select_breaking(
     gathered = comm.allgather(local[:count])
     chosen = sorted(c for part in gathered for c in part)[:count]
     return np.array([c[-1] for c in chosen if c[-2] == comm.rank], dtype=np.int64)
+
+
+__all__ = [
+    "BREAK_RULES",
+    "FacetState",
+    "InterfaceModel",
+    "Overstress",
+    "check_failure",
+    "select_breaking",
+    "stable_facet_hash",
+    "weibull_scatter",
+]

@@ -11,7 +11,7 @@ Unknowns and equations (implicit Euler, one step ``dt``):
 - Fluid content is tracked as volume at the reference density,
   ``M = V (1 + p / Kw)``.  Each wet group satisfies
   ``M_g(p) - M_g^n - dt (sum of inflows) - injected + leaked = 0``; fluxes follow
-  the cubic law on the :class:`~hfcdem.network.Network`.
+  the cubic law on the :class:`~hfcdem.flow.network.Network`.
 - Filling (``filling="saturation"``, the seed paper's eqs. (14)-(19)): a dry
   facet is at zero pressure with saturation ``S = M / V``; it gains fluid from
   wet neighbours through ``ks = S^2 (3 - 2S)`` and turns wet when full.  With
@@ -43,11 +43,11 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from hfcdem.cdem import _OPEN, _SPRING, OPEN, CDEMSolid, Loads
-from hfcdem.fluid import CarterLeakOff, Fluid, Injection
-from hfcdem.interfaces import FacetState, select_breaking
-from hfcdem.network import Network, build_network, gather_rows
-from hfcdem.output import write_csv
+from hfcdem.flow.fluid import CarterLeakOff, Fluid, Injection
+from hfcdem.flow.network import Network, build_network, gather_rows
+from hfcdem.io.files import write_csv
+from hfcdem.solid.cdem import OPEN, OPEN_FACETS, SPRING, CDEMSolid, Loads
+from hfcdem.solid.interfaces import FacetState, select_breaking
 
 # a floor on storage and aperture keeps a closed, dry facet's equations regular
 _APERTURE_FLOOR = 1e-9  # m
@@ -233,6 +233,24 @@ class HydraulicFracture:
         nodes = dolfinx.mesh.entities_to_geometry(mesh, tdim - 1, facets.astype(np.int32), False)
         return np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)[nodes]
 
+    @property
+    def cavity_vertices(self) -> np.ndarray:
+        """Global ids of the mesh vertices on the cavity walls."""
+        return self._cavity_vertices
+
+    @property
+    def wall_joints(self) -> np.ndarray:
+        """Per interface facet: True where it holds the cavity's fluid (a wet wall joint)."""
+        return self._wall_joints
+
+    def rebuild(self) -> None:
+        """Refactorise the solid and recondense for the current interface states.
+
+        Runs of :meth:`step` call it at every interface event; a benchmark calls it
+        to time one event.
+        """
+        self._rebuild()
+
     def _find_cavity_vertices(self) -> np.ndarray:
         tm = self.solid.tmesh
         ids = [self._local_vertex_ids(tm.facets(name)).reshape(-1) for name in self.settings.cavity]
@@ -298,14 +316,14 @@ class HydraulicFracture:
         wet = self._intact_wall_joints()
         if not self.comm.allreduce(bool(wet.any()), op=MPI.LOR):
             return None
-        jw = solid._facet_function(wet.astype(float))
+        jw = solid.facet_function(wet.astype(float))
         nrm = ufl.FacetNormal(solid.mesh)
         if dS is None:
-            dS = ufl.Measure("dS", domain=solid.mesh, subdomain_data=solid._interface_tags())
+            dS = ufl.Measure("dS", domain=solid.mesh, subdomain_data=solid.interface_tags())
         return (
             -jw("+")
             * ufl.dot(nrm("+"), ufl.jump(v))
-            * dS(_SPRING, metadata={"quadrature_degree": 1})
+            * dS(SPRING, metadata={"quadrature_degree": 1})
         )
 
     def _cavity_load_form(self) -> dolfinx.fem.Form | None:
@@ -419,9 +437,13 @@ class HydraulicFracture:
         # unit pressure per group on its open facets, plus the walls for the cavity group
         v, nrm = ufl.TestFunction(solid.V), ufl.FacetNormal(solid.mesh)
         # per-facet values through a CR function (exact at the single quadrature point)
-        cr = solid._facet_function(np.zeros(solid.num_facets))
-        dS = ufl.Measure("dS", domain=solid.mesh, subdomain_data=solid._interface_tags())
-        L = -cr("+") * ufl.dot(nrm("+"), ufl.jump(v)) * dS(_OPEN, metadata={"quadrature_degree": 1})
+        cr = solid.facet_function(np.zeros(solid.num_facets))
+        dS = ufl.Measure("dS", domain=solid.mesh, subdomain_data=solid.interface_tags())
+        L = (
+            -cr("+")
+            * ufl.dot(nrm("+"), ufl.jump(v))
+            * dS(OPEN_FACETS, metadata={"quadrature_degree": 1})
+        )
         c_cav = dolfinx.fem.Constant(solid.mesh, dolfinx.default_scalar_type(0.0))
         if self.settings.cavity:
             L += sum(
@@ -432,7 +454,7 @@ class HydraulicFracture:
                 L += c_cav * joints
             self._cav_form = self._cavity_load_form()  # the intact joints change with breaks
         L_form = dolfinx.fem.form(L)
-        _, cr_dofs = solid._cr_cache[()]
+        cr_dofs = solid.facet_dofs()
         local_group = np.full(solid.num_facets, -2, dtype=np.int64)
         local_group[self._local_fracture] = self.group[self._local_pos]
         local_open = np.zeros(solid.num_facets, dtype=bool)
@@ -890,7 +912,7 @@ class HydraulicFracture:
             contact_iterations += 1 if switched else 0
             if switched:
                 self._last_change = f"{switched} contacts switched"
-                solid._sync_ghost_states()
+                solid.sync_ghost_states()
                 self._store_state()
                 self._rebuild()
                 continue
@@ -927,7 +949,7 @@ class HydraulicFracture:
             if nbreak:
                 self._event_cuts = 0
                 self._last_change = f"{nbreak} broke"
-                solid._break(chosen, mode[chosen], t1)
+                solid.break_facets(chosen, mode[chosen], t1)
                 if self.first_break_time is None:
                     self.first_break_time = t1
                 self._store_state()
@@ -1206,7 +1228,7 @@ class HydraulicFracture:
 
         Data: fluid pressure (MPa), hydraulic aperture (m), saturation, failure
         state (1 tensile, 2 shear), open (1) or closed (0); for
-        :func:`hfcdem.output.write_interfaces`.
+        :func:`hfcdem.io.files.write_interfaces`.
         """
         sel = self._owned_sel
         pos = self._local_pos[sel]
@@ -1274,3 +1296,12 @@ class HydraulicFracture:
 def _col(values: np.ndarray, like: np.ndarray) -> np.ndarray:
     """Broadcast a per-item array against a (m,) or (m, k) pressure array."""
     return values.reshape(values.shape + (1,) * (like.ndim - 1))
+
+
+__all__ = [
+    "FlowSettings",
+    "HydraulicFracture",
+    "SimulationStopped",
+    "StepRecord",
+    "relative_permeability",
+]

@@ -55,3 +55,9 @@ def detect_breakdown(
         if below >= hold:
             return Breakdown(pressure=float(peak), time=float(peak_time), confirmed_at=float(ti))
     return None
+
+
+__all__ = [
+    "Breakdown",
+    "detect_breakdown",
+]

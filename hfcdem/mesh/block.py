@@ -3,7 +3,7 @@
 Each tunnel is lofted (OCC ``addThruSections``, ruled) through circles at its
 stations, so it is a stack of conical frustums.  It starts a little inside the
 wellbore, on the backward extension of its first segment
-(:func:`hfcdem.scene.tunnel_extension`), so the boolean cut is robust; the
+(:func:`hfcdem.config.scene.tunnel_extension`), so the boolean cut is robust; the
 part of the tunnel outside the wellbore is then the frustum stack plus a thin
 *sliver* between the curved wellbore wall and the plane of station 0.  The
 analytic references here (:func:`expected_measures`) include the sliver and
@@ -38,7 +38,7 @@ from typing import Any
 import gmsh
 import numpy as np
 
-from hfcdem.scene import (
+from hfcdem.config.scene import (
     AXES,
     PerforatedBlock,
     Profile,
@@ -372,7 +372,7 @@ def plane_residual(i: int, value: float) -> Residual:
     return residual
 
 
-def _face_candidates(geom: PerforatedBlock) -> list[tuple[str, int, Residual]]:
+def face_candidates(geom: PerforatedBlock) -> list[tuple[str, int, Residual]]:
     """(tag name, segment, distance of points to that analytic surface) for every face kind."""
     lo, hi = kept_box(geom)
     out: list[tuple[str, int, Residual]] = []
@@ -418,7 +418,7 @@ def classify_faces(
     Returns ``{tag name: [(face, segment), ...]}``; ``segment`` is the tunnel
     segment (from 0) of a perforation wall face, -1 otherwise.
     """
-    candidates = _face_candidates(geom)
+    candidates = face_candidates(geom)
     scale = float(np.max(geom.block.size))
     tol = 1e-5 * scale
     groups: dict[str, list[tuple[int, int]]] = {}
@@ -556,3 +556,20 @@ def build_perforated_block(geom: PerforatedBlock, model: Any) -> dict[str, Any]:
         "quality": element_quality(model, 3),
         "faces": {name: len(v) for name, v in sorted(groups.items())},
     }
+
+
+__all__ = [
+    "Residual",
+    "SliverMeasures",
+    "TunnelFrame",
+    "TunnelMeasures",
+    "build_perforated_block",
+    "classify_faces",
+    "element_quality",
+    "expected_measures",
+    "kept_box",
+    "plane_residual",
+    "sliver_measures",
+    "tunnel_frame",
+    "tunnel_measures",
+]

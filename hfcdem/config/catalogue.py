@@ -358,3 +358,16 @@ def preset_names() -> tuple[str, ...]:
 def lookup_preset(name: str) -> dict[str, Any]:
     """Return a deep copy of the geometry table of preset ``name``; KeyError if unknown."""
     return copy.deepcopy(PRESETS[name])
+
+
+__all__ = [
+    "D13_COMPUTED_MM",
+    "D13_PAPER_MM",
+    "MM",
+    "PRESETS",
+    "PROFILES",
+    "lookup_preset",
+    "lookup_profile",
+    "preset_names",
+    "profile_names",
+]

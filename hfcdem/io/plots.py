@@ -231,7 +231,7 @@ def plot_interface_states(
     comm.barrier()
 
 
-def _owned_boundary_triangles(tmesh: Any, names: Sequence[str]) -> np.ndarray:
+def owned_boundary_triangles(tmesh: Any, names: Sequence[str]) -> np.ndarray:
     """Vertex coordinates (F, nv, 3) of this rank's owned facets of groups ``names``."""
     mesh = tmesh.mesh
     fdim = mesh.topology.dim - 1
@@ -307,3 +307,12 @@ def render_fracture_pattern(
     plotter.screenshot(str(path))
     plotter.close()
     comm.barrier()
+
+
+__all__ = [
+    "ensure_display",
+    "plot_interface_states",
+    "plot_lines",
+    "render_field",
+    "render_fracture_pattern",
+]

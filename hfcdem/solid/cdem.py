@@ -1,18 +1,18 @@
 """The CDEM solid: elastic blocks joined by breakable interface springs.
 
-Discretisation (design.md option (a), measured against the alternatives in the
+Discretisation (docs/design.md option (a), measured against the alternatives in the
 closing notes): the displacement is discontinuous Lagrange (DG1 or DG2) on every
 cell, so every facet is a potential interface.
 
 - Facets of the *fracturable zone* carry springs ``kn [u_n] + ks [u_t]`` with
-  ``kn = alpha E / h``; they break by the rules of :mod:`hfcdem.interfaces`.
+  ``kn = alpha E / h``; they break by the rules of :mod:`hfcdem.solid.interfaces`.
 - Pre-existing cracks (facet group ``"crack"`` and any others named) start
   broken and open.
 - All other interior facets are glued by a symmetric interior penalty (Nitsche)
   term, which is consistent: away from the zone the blocks behave as a
   continuous body with no spring compliance.
 
-The unknown is the perturbation of the in-situ state (see :mod:`hfcdem.solid`).
+The unknown is the perturbation of the in-situ state (see :mod:`hfcdem.solid.elastic`).
 Interface traction on the ``+`` side: ``t = sigma0 n+ - K (u+ - u-)`` while
 intact or closed; ``-p n+`` while open with fluid pressure ``p``.
 """
@@ -31,7 +31,9 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from hfcdem.interfaces import (
+from hfcdem.mesh.tagged import TaggedMesh
+from hfcdem.solid.elastic import ElasticMaterial, InSituStress, strain, stress
+from hfcdem.solid.interfaces import (
     FacetState,
     InterfaceModel,
     check_failure,
@@ -39,15 +41,13 @@ from hfcdem.interfaces import (
     stable_facet_hash,
     weibull_scatter,
 )
-from hfcdem.meshing import TaggedMesh
-from hfcdem.solid import ElasticMaterial, InSituStress, strain, stress
 from hfcdem.solvers import DIRECT_CHOLESKY, check_ksp, create_ksp, setup_factorisation
 
 # interior-facet integral ids
-_SPRING = 1  # intact, or broken and closed in stick: kn and ks
-_OPEN = 2  # broken/pre-existing and open: fluid pressure, no springs
-_SLIP = 3  # broken, closed, sliding: kn and a friction traction
-_GLUE = 4  # outside the zone: Nitsche continuity
+SPRING = 1  # intact, or broken and closed in stick: kn and ks
+OPEN_FACETS = 2  # broken/pre-existing and open: fluid pressure, no springs
+SLIP_FACETS = 3  # broken, closed, sliding: kn and a friction traction
+GLUE = 4  # outside the zone: Nitsche continuity
 
 # contact sub-states of broken facets
 OPEN, STICK, SLIP = 0, 1, 2
@@ -314,17 +314,24 @@ class CDEMSolid:
 
     # ------------------------------------------------------------------ forms
 
-    def _interface_tags(self) -> dolfinx.mesh.MeshTags:
+    def interface_tags(self) -> dolfinx.mesh.MeshTags:
+        """Tag interface facets by their integral: SPRING, OPEN_FACETS, SLIP_FACETS or GLUE."""
         broken = self.state != FacetState.INTACT
-        values = np.full(self.num_facets, _SPRING, dtype=np.int32)
-        values[broken & (self.contact == OPEN)] = _OPEN
-        values[broken & (self.contact == SLIP)] = _SLIP
+        values = np.full(self.num_facets, SPRING, dtype=np.int32)
+        values[broken & (self.contact == OPEN)] = OPEN_FACETS
+        values[broken & (self.contact == SLIP)] = SLIP_FACETS
         idx = np.concatenate([self.facets, self.glue_facets]).astype(np.int32)
-        vals = np.concatenate([values, np.full(len(self.glue_facets), _GLUE, dtype=np.int32)])
+        vals = np.concatenate([values, np.full(len(self.glue_facets), GLUE, dtype=np.int32)])
         order = np.argsort(idx)
         return dolfinx.mesh.meshtags(self.mesh, self.mesh.topology.dim - 1, idx[order], vals[order])
 
-    def _facet_function(
+    def facet_dofs(self, shape: tuple[int, ...] = ()) -> np.ndarray:
+        """Dofs of the Crouzeix-Raviart space of ``shape`` at this rank's interface facets."""
+        if shape not in self._cr_cache:
+            self.facet_function(np.zeros((self.num_facets, *shape)), shape)
+        return self._cr_cache[shape][1]
+
+    def facet_function(
         self, values: np.ndarray, shape: tuple[int, ...] = ()
     ) -> dolfinx.fem.Function:
         """Return per-facet values as a Crouzeix-Raviart function (exact at facet midpoints)."""
@@ -358,7 +365,7 @@ class CDEMSolid:
         u, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
         n = ufl.FacetNormal(mesh)
         npl = n("+")
-        dS = ufl.Measure("dS", domain=mesh, subdomain_data=self._interface_tags())
+        dS = ufl.Measure("dS", domain=mesh, subdomain_data=self.interface_tags())
         h = ufl.avg(ufl.CellDiameter(mesh))
         # stiffness factors as Constants: changing alpha or the rock never recompiles
         kn = self._c_kn / h
@@ -369,17 +376,17 @@ class CDEMSolid:
         ju, jv = ufl.jump(u), ufl.jump(v)
 
         a = ufl.inner(stress(u, self.material), strain(v)) * ufl.dx
-        a += ufl.inner(K * ju, jv) * dS(_SPRING)
-        a += ufl.inner(kn * Pn * ju, jv) * dS(_SLIP)
+        a += ufl.inner(K * ju, jv) * dS(SPRING)
+        a += ufl.inner(kn * Pn * ju, jv) * dS(SLIP_FACETS)
         # a residual spring on open and sliding faces keeps detached blocks attached
-        a += self._c_residual * ufl.inner(K * ju, jv) * dS(_OPEN)
-        a += self._c_residual * ks * ufl.inner((eye - Pn) * ju, jv) * dS(_SLIP)
+        a += self._c_residual * ufl.inner(K * ju, jv) * dS(OPEN_FACETS)
+        a += self._c_residual * ks * ufl.inner((eye - Pn) * ju, jv) * dS(SLIP_FACETS)
         # Nitsche glue outside the zone (symmetric interior penalty)
         a += (
             -ufl.inner(ufl.avg(stress(u, self.material)) * npl, jv)
             - ufl.inner(ufl.avg(stress(v, self.material)) * npl, ju)
             + self._c_glue / h * ufl.inner(ju, jv)
-        ) * dS(_GLUE)
+        ) * dS(GLUE)
 
         rhs = [self._rhs(loads, v, n, dS) for loads in ([loads_a] + ([loads_b] if loads_b else []))]
         return a, rhs
@@ -402,31 +409,31 @@ class CDEMSolid:
         npl = n("+")
         if np.isscalar(loads.crack_pressure):
             p_crack = const(float(loads.crack_pressure))  # type: ignore[arg-type]
-            L += -ufl.inner((p_crack * eye + sigma0) * npl, ufl.jump(v)) * dS(_OPEN)
+            L += -ufl.inner((p_crack * eye + sigma0) * npl, ufl.jump(v)) * dS(OPEN_FACETS)
         else:
-            pf = self._facet_function(np.asarray(loads.crack_pressure))
+            pf = self.facet_function(np.asarray(loads.crack_pressure))
             L += -ufl.inner((pf("+") * eye + sigma0) * npl, ufl.jump(v)) * dS(
-                _OPEN, metadata={"quadrature_degree": 1}
+                OPEN_FACETS, metadata={"quadrature_degree": 1}
             )
         has_joints = loads.joint_pressure is not None and bool(np.any(loads.joint_pressure))
         if self.comm.allreduce(has_joints, op=MPI.LOR):  # collective, as below
-            jf = self._facet_function(
+            jf = self.facet_function(
                 np.zeros(len(self.facets))
                 if loads.joint_pressure is None
                 else np.asarray(loads.joint_pressure)
             )
             L += -ufl.inner(jf("+") * npl, ufl.jump(v)) * dS(
-                _SPRING, metadata={"quadrature_degree": 1}
+                SPRING, metadata={"quadrature_degree": 1}
             )
         # collective decision: building the facet function is collective
         any_slip = self.comm.allreduce(bool(np.any(self.contact == SLIP)), op=MPI.LOR)
         if any_slip and loads.in_situ_factor != 0.0:
             # friction minus in-situ shear on sliding faces, per facet (+ side); a unit
             # load (no in-situ part) is the linearisation about the current slip set
-            tf = self._facet_function(self.friction_traction, (gdim,))
+            tf = self.facet_function(self.friction_traction, (gdim,))
             tau0 = sigma0 * npl - ufl.inner(sigma0 * npl, npl) * npl
             L += ufl.inner(tf("+") - tau0, ufl.jump(v)) * dS(
-                _SLIP, metadata={"quadrature_degree": 1}
+                SLIP_FACETS, metadata={"quadrature_degree": 1}
             )
         return L
 
@@ -517,7 +524,7 @@ class CDEMSolid:
         """Compiled right-hand side of ``loads`` for the current interface states."""
         v = ufl.TestFunction(self.V)
         n = ufl.FacetNormal(self.mesh)
-        dS = ufl.Measure("dS", domain=self.mesh, subdomain_data=self._interface_tags())
+        dS = ufl.Measure("dS", domain=self.mesh, subdomain_data=self.interface_tags())
         return dolfinx.fem.form(self._rhs(loads, v, n, dS))
 
     def solve(self, loads: Loads, unit: Loads | None = None) -> None:
@@ -626,15 +633,16 @@ class CDEMSolid:
         ratio = np.where((self.state == FacetState.INTACT) & self.owned, ratio, 0.0)
         return ratio, mode
 
-    def _break(self, facets: np.ndarray, modes: np.ndarray, load_factor: float) -> None:
+    def break_facets(self, facets: np.ndarray, modes: np.ndarray, load_factor: float) -> None:
+        """Break local ``facets`` in ``modes`` (1 tensile, 2 shear) at ``load_factor``."""
         self.state[facets] = modes
         # tensile breaks start open, shear breaks closed; update_contact corrects both
         self.contact[facets] = np.where(modes == FacetState.TENSILE, OPEN, STICK)
-        self._sync_ghost_states()
+        self.sync_ghost_states()
         mids = self.midpoints[facets]
         self.events.append(BreakEvent(load_factor, facets, modes, mids))
 
-    def _sync_ghost_states(self) -> None:
+    def sync_ghost_states(self) -> None:
         """Owners decide; ghosts copy (states live on facets shared by two ranks)."""
         tdim = self.mesh.topology.dim
         imap = self.mesh.topology.index_map(tdim - 1)
@@ -671,12 +679,12 @@ class CDEMSolid:
             )
             n_break = int(self.comm.allreduce(len(chosen), op=MPI.SUM))
             if n_break:
-                self._break(chosen, mode[chosen], load_factor)
+                self.break_facets(chosen, mode[chosen], load_factor)
                 broken_total += n_break
                 continue
             if self.update_contact(loads) == 0:
                 return broken_total
-            self._sync_ghost_states()
+            self.sync_ghost_states()
         raise RuntimeError(
             f"interface states did not settle in {max_iterations} iterations "
             f"({broken_total} facets broke); try break_rule='all' or a smaller load step"
@@ -826,3 +834,14 @@ def combine(base: Loads, unit: Loads, lam: float) -> Loads:
         else float(base.crack_pressure) + lam * float(unit.crack_pressure),  # type: ignore[arg-type]
         in_situ_factor=base.in_situ_factor + lam * unit.in_situ_factor,
     )
+
+
+__all__ = [
+    "AUTO_DIRECT_MAX_DOFS",
+    "BreakEvent",
+    "CDEMSolid",
+    "InterfaceSnapshot",
+    "Loads",
+    "ZoneMarker",
+    "combine",
+]

@@ -212,3 +212,11 @@ def build_network(
         touches_cavity=touches,
     )
     return net, mine
+
+
+__all__ = [
+    "CAVITY",
+    "Network",
+    "build_network",
+    "gather_rows",
+]

@@ -4,7 +4,7 @@ Only the *geometry* of a scene exists so far; the sections later issues will
 fill (``rock``, ``stress``, ``fluid``, ``injection``, ``solver``, ``output``)
 are accepted and ignored, any other top-level key is an error.  Every
 dimensional value carries its unit (``"33.44 mm"``, ``"2 m"``, ``"60 deg"``;
-:mod:`hfcdem.units`), and every error names the field by its dotted path
+:mod:`hfcdem.config.units`), and every error names the field by its dotted path
 (``geometry.perforations[0].diameters[2]``) and the expected range, before Gmsh
 runs.
 
@@ -43,8 +43,8 @@ from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 
-from hfcdem import catalogue
-from hfcdem.units import FieldError, join_path, parse_quantity
+from hfcdem.config import catalogue
+from hfcdem.config.units import FieldError, join_path, parse_quantity
 
 Vector = tuple[float, float, float]
 AXES = ("x", "y", "z")
@@ -935,7 +935,7 @@ class Scene:
     resolution: str = "default"
     source: str | None = None
     ignored_sections: tuple[str, ...] = field(default=())
-    physics: Any = None  # hfcdem.scene_physics.Physics when the file has physics sections
+    physics: Any = None  # hfcdem.config.physics.Physics when the file has physics sections
 
     def __post_init__(self) -> None:
         if not self.name or not all(c.isalnum() or c in "-_." for c in self.name):
@@ -960,7 +960,7 @@ _MISSING: Any = object()
 T = TypeVar("T")
 
 
-class _Table:
+class TomlTable:
     """One TOML table being read: typed getters that name fields, and unknown-key checks."""
 
     def __init__(self, data: Any, path: str) -> None:
@@ -985,7 +985,7 @@ class _Table:
         return default
 
     def quantity(self, key: str, dimension: str, default: Any = _MISSING) -> Any:
-        from hfcdem.units import EXAMPLES
+        from hfcdem.config.units import EXAMPLES
 
         value = self.raw(key, default, f"a {dimension} such as '{EXAMPLES[dimension]}'")
         if value is default and default is not _MISSING:
@@ -1024,15 +1024,15 @@ class _Table:
             )
         return value
 
-    def table(self, key: str) -> _Table | None:
+    def table(self, key: str) -> TomlTable | None:
         value = self.raw(key, None)
-        return None if value is None else _Table(value, self.sub(key))
+        return None if value is None else TomlTable(value, self.sub(key))
 
-    def tables(self, key: str) -> list[_Table]:
+    def tables(self, key: str) -> list[TomlTable]:
         value = self.raw(key, [])
         if not isinstance(value, list):
             raise SceneError(self.sub(key), f"expected an array of tables, got {value!r}")
-        return [_Table(v, f"{self.sub(key)}[{i}]") for i, v in enumerate(value)]
+        return [TomlTable(v, f"{self.sub(key)}[{i}]") for i, v in enumerate(value)]
 
     def finish(self, extra: Sequence[str] = ()) -> None:
         unknown = sorted(set(self.data) - self.used - set(extra))
@@ -1069,7 +1069,7 @@ _PROFILE_KEYS = ("profile", "diameters", "lengths", "diameter", "length")
 _DIRECTION_KEYS = ("azimuth", "inclination", "direction", "phase")
 
 
-def _read_profile(t: _Table) -> Profile:
+def _read_profile(t: TomlTable) -> Profile:
     name = t.string("profile", None, catalogue.profile_names())
     explicit = [k for k in ("diameters", "lengths", "diameter", "length") if t.has(k)]
     if any(k in explicit for k in ("diameter", "length")) and any(
@@ -1111,7 +1111,7 @@ def _read_profile(t: _Table) -> Profile:
     )
 
 
-def _read_direction(t: _Table, wellbore: Wellbore, phase_offset: float = 0.0) -> Vector:
+def _read_direction(t: TomlTable, wellbore: Wellbore, phase_offset: float = 0.0) -> Vector:
     if t.has("direction") and (t.has("azimuth") or t.has("inclination")):
         raise SceneError(t.path, "give either direction or azimuth/inclination, not both")
     if t.has("direction"):
@@ -1137,7 +1137,7 @@ def _rotate(v: np.ndarray, axis: np.ndarray, angle: float) -> Vector:
     return (float(out[0]), float(out[1]), float(out[2]))
 
 
-def _read_perforation(t: _Table, wellbore: Wellbore) -> Perforation:
+def _read_perforation(t: TomlTable, wellbore: Wellbore) -> Perforation:
     profile = _read_profile(t)
     direction = _read_direction(t, wellbore)
     entry = t.quantity("entry", "length", 0.0)
@@ -1145,7 +1145,7 @@ def _read_perforation(t: _Table, wellbore: Wellbore) -> Perforation:
     return _build(t.path, Perforation, profile, direction, entry)
 
 
-def _read_cluster(t: _Table, wellbore: Wellbore) -> list[Perforation]:
+def _read_cluster(t: TomlTable, wellbore: Wellbore) -> list[Perforation]:
     count = t.number("count", integer=True)
     if not 1 <= count <= 100:
         raise SceneError(t.sub("count"), f"expected 1..100 perforations, got {count}")
@@ -1167,7 +1167,7 @@ def _read_cluster(t: _Table, wellbore: Wellbore) -> list[Perforation]:
     return out
 
 
-def _read_zone(t: _Table | None) -> FracturableZone | None:
+def _read_zone(t: TomlTable | None) -> FracturableZone | None:
     if t is None:
         return None
     shape = t.string("shape", choices=("sphere", "tunnel", "slab"))
@@ -1207,7 +1207,7 @@ _MESH_KEYS = (
 
 
 def _read_mesh(
-    t: _Table | None, path: str, resolution: str | None, size: float | None
+    t: TomlTable | None, path: str, resolution: str | None, size: float | None
 ) -> tuple[MeshSizing, str]:
     if t is None:
         raise SceneError(join_path(path, "mesh"), "missing; expected a table with at least size")
@@ -1225,7 +1225,7 @@ def _read_mesh(
         bad = sorted(set(override) - set(_MESH_KEYS[:-1]))
         if bad:
             raise SceneError(t.sub(f"resolutions.{resolution}.{bad[0]}"), "unknown key")
-        t = _Table({**t.data, **override}, t.path)
+        t = TomlTable({**t.data, **override}, t.path)
         chosen = resolution
     t.raw("resolutions", None)
     value = t.quantity("size", "length")
@@ -1243,7 +1243,7 @@ def _read_mesh(
     return _build(t.path, MeshSizing, **kwargs), chosen
 
 
-def _read_symmetry(t: _Table) -> str | tuple[str, ...]:
+def _read_symmetry(t: TomlTable) -> str | tuple[str, ...]:
     value = t.raw("symmetry", "none")
     if value in ("none", "auto"):
         return str(value)
@@ -1272,13 +1272,13 @@ def parse_geometry(
 ) -> tuple[Geometry, str | None, str]:
     """Read a ``[geometry]`` table; return (geometry, catalogue name, resolution used).
 
-    ``catalogue = NAME`` starts from a preset (:mod:`hfcdem.catalogue`) that the
+    ``catalogue = NAME`` starts from a preset (:mod:`hfcdem.config.catalogue`) that the
     other keys override (tables merge key by key; lists and the ``fracturable``
     table are replaced whole).
     ``resolution`` picks a named ``mesh.resolutions`` entry; ``size`` (m)
     overrides ``mesh.size``.
     """
-    top = _Table(data, path)
+    top = TomlTable(data, path)
     name = top.string("catalogue", None)
     if name is not None:
         if name not in catalogue.PRESETS:
@@ -1293,7 +1293,7 @@ def parse_geometry(
                 f"catalogue entry {name!r} is a {preset['kind']}, not {data['kind']!r}",
             )
         merged = _merge(preset, {k: v for k, v in data.items() if k != "catalogue"})
-        top = _Table({**merged, "catalogue": name}, path)
+        top = TomlTable({**merged, "catalogue": name}, path)
         top.used.add("catalogue")
     kind = top.string("kind", choices=tuple(_KIND_KEYS))
     symmetry = _read_symmetry(top)
@@ -1312,7 +1312,7 @@ def parse_geometry(
 
 
 def _read_block_scene(
-    top: _Table, sizing: MeshSizing, zone: FracturableZone | None, axes: tuple[str, ...]
+    top: TomlTable, sizing: MeshSizing, zone: FracturableZone | None, axes: tuple[str, ...]
 ) -> PerforatedBlock:
     bt = top.table("block")
     if bt is None:
@@ -1352,7 +1352,11 @@ def _read_block_scene(
 
 
 def _read_plate_scene(
-    top: _Table, kind: str, sizing: MeshSizing, zone: FracturableZone | None, axes: tuple[str, ...]
+    top: TomlTable,
+    kind: str,
+    sizing: MeshSizing,
+    zone: FracturableZone | None,
+    axes: tuple[str, ...],
 ) -> Geometry:
     for key in ("block", "perforations", "cluster"):
         if top.has(key):
@@ -1404,14 +1408,14 @@ def _parse_scene(
     size: float | None,
     source: str | None,
 ) -> Scene:
-    top = _Table(data, "")
+    top = TomlTable(data, "")
     name = top.string("name", default_name)
     description = top.string("description", "")
     gt = top.table("geometry")
     if gt is None:
         raise SceneError("geometry", "missing; every scene needs a [geometry] table")
     geometry, preset, chosen = parse_geometry(gt.data, "geometry", resolution, size)
-    from hfcdem.scene_physics import PHYSICS_SECTIONS, parse_physics
+    from hfcdem.config.physics import PHYSICS_SECTIONS, parse_physics
 
     # [output] alone (a geometry-only scene) does not ask for physics: it is ignored
     wanted = any(k in data for k in PHYSICS_SECTIONS if k != "output")
@@ -1481,3 +1485,39 @@ def load_scene(
         return parse_scene(data, p.stem, resolution, size, str(p))
     except FieldError as exc:
         raise SceneError(f"{p.name}: {exc.path}" if exc.path else p.name, exc.reason) from None
+
+
+__all__ = [
+    "AXES",
+    "MAX_CELLS",
+    "MM",
+    "RESERVED_SECTIONS",
+    "Block",
+    "BoreholeSquare",
+    "Crack",
+    "CrackPlate",
+    "FracturableZone",
+    "Geometry",
+    "KGDStrip",
+    "MeshSizing",
+    "PerforatedBlock",
+    "Perforation",
+    "Plate",
+    "Profile",
+    "Scene",
+    "SceneError",
+    "SlabZone",
+    "SphereZone",
+    "T",
+    "TunnelZone",
+    "Vector",
+    "Wellbore",
+    "axis_index",
+    "axis_vector",
+    "load_scene",
+    "parse_geometry",
+    "parse_scene",
+    "set_field",
+    "show_length",
+    "tunnel_extension",
+]

@@ -2,7 +2,7 @@
 
 ``hfcdem run SCENE.toml -o DIR`` calls :func:`run_scene`.  The scene file must
 state its physics (``[rock]``, ``[stress]``, ``[injection]``; see
-:mod:`hfcdem.scene_physics`).  Boundary conditions follow the tag names:
+:mod:`hfcdem.config.physics`).  Boundary conditions follow the tag names:
 symmetry planes are rollers, outer faces are fixed.  The fracturable zone is
 the ``fracture_path`` facet group when the scene has one (a prescribed path),
 else the ``fracturable`` cell group, else the whole rock.  The cavity is every
@@ -13,7 +13,7 @@ Written into DIR (rank 0, atomically): ``run.json`` at the start (the scene and
 its defaults), ``history.csv`` after every step, and at the end
 ``summary.json``, ``pressure.png`` (the injection pressure with the breakdown
 marked) and ``fracture.vtu`` (fluid pressure, aperture, saturation and state per
-fracture facet).  Over time, for ParaView (:mod:`hfcdem.series`): ``fields.bp``
+fracture facet).  Over time, for ParaView (:mod:`hfcdem.io.series`): ``fields.bp``
 (displacement, normal stresses) and ``interfaces.pvd`` (failure state, opening,
 fluid pressure, saturation per interface).  A run that stops keeps what it wrote.
 """
@@ -32,13 +32,13 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
-from hfcdem.breakdown import detect_breakdown
-from hfcdem.cdem import CDEMSolid
-from hfcdem.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
+from hfcdem.config.scene import Scene, SceneError
+from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
 from hfcdem.info import versions
-from hfcdem.output import _to_builtin, prepare_output_dir, write_interfaces, write_json
-from hfcdem.scene import Scene, SceneError
-from hfcdem.series import FieldSeries, output_times
+from hfcdem.io.files import prepare_output_dir, to_builtin, write_interfaces, write_json
+from hfcdem.io.series import FieldSeries, output_times
+from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.workflows.breakdown import detect_breakdown
 
 ROLLER_AXES = {"symmetry_x": 0, "symmetry_y": 1, "symmetry_z": 2}
 
@@ -166,7 +166,7 @@ def run_scene(
     ``resume``: continue from ``checkpoint.json`` of an earlier, stopped run of
     the same scene in ``output`` (written after every step).
     """
-    from hfcdem.scene_mesh import create_scene_mesh
+    from hfcdem.mesh.build import create_scene_mesh
 
     if scene.physics is None:
         raise SceneError(
@@ -216,7 +216,7 @@ def run_scene(
         }
 
     if phys.load is not None:
-        from hfcdem.static import run_static
+        from hfcdem.workflows.static import run_static
 
         return run_static(scene, solid, out, say, record)
     frac = build_fracture(scene, solid)
@@ -311,8 +311,8 @@ def run_scene(
 
 def _picture_fracture(path: Path, scene: Scene, frac: HydraulicFracture) -> None:
     """Draw the failure state of the interfaces (the paper's Figs. 16-17)."""
-    from hfcdem.plotting import (
-        _owned_boundary_triangles,
+    from hfcdem.io.plots import (
+        owned_boundary_triangles,
         plot_interface_states,
         render_fracture_pattern,
     )
@@ -327,7 +327,7 @@ def _picture_fracture(path: Path, scene: Scene, frac: HydraulicFracture) -> None
         extent = solid.comm.allreduce(float(reach), op=MPI.MAX) * 1.3 or 1.0
         plot_interface_states(path, points, states, title, extent, solid.comm)
         return
-    walls = _owned_boundary_triangles(solid.tmesh, frac.settings.cavity)
+    walls = owned_boundary_triangles(solid.tmesh, frac.settings.cavity)
     wellbore = getattr(scene.geometry, "wellbore", None)
     axis = "xyz".index(wellbore.axis) if wellbore is not None else 2
     render_fracture_pattern(path, points, states, walls, title, axis, solid.comm)
@@ -391,7 +391,7 @@ def _resolved_scene(scene: Scene) -> dict[str, Any]:
 
 
 def _jsonable(value: Any) -> Any:
-    return _to_builtin(value, strict=True)
+    return to_builtin(value, strict=True)
 
 
 def _plot_pressure(path: Path, times: list[float], pressures: list[float], found: Any, name: str):
@@ -418,3 +418,15 @@ def _plot_pressure(path: Path, times: list[float], pressures: list[float], found
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+__all__ = [
+    "ROLLER_AXES",
+    "OutputInUse",
+    "build_fracture",
+    "build_solid",
+    "pressurised_groups",
+    "run_scene",
+    "scene_fingerprint",
+    "wall_area",
+]

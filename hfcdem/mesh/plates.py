@@ -1,15 +1,15 @@
 """Gmsh models of 2D plates (plane strain, x-y plane) for the verification scenes.
 
-* :class:`~hfcdem.scene.CrackPlate`: a plate with a central pre-existing crack
+* :class:`~hfcdem.config.scene.CrackPlate`: a plate with a central pre-existing crack
   along x (seed cdem-perforation-breakdown Table 1: 1 m square, 0.2 m crack).
   The crack is an internal line of the mesh: the triangles on its two sides
   share its facets (nothing is duplicated); the CDEM solid treats them as a
   pre-existing crack through interior-facet integrals ``dS(crack)``.
-* :class:`~hfcdem.scene.KGDStrip`: a plate with an initial crack (``crack``)
+* :class:`~hfcdem.config.scene.KGDStrip`: a plate with an initial crack (``crack``)
   and, beyond it, the line the fracture is expected to follow
   (``fracture_path``), both internal lines; the injection point, the origin,
   is a mesh vertex.
-* :class:`~hfcdem.scene.BoreholeSquare`: a square with a borehole at its
+* :class:`~hfcdem.config.scene.BoreholeSquare`: a square with a borehole at its
   centre (seed pfc2d sec. 3.2: 1000 mm square, 60 mm borehole).
 
 Tag names (the API):
@@ -35,8 +35,8 @@ from typing import Any
 import gmsh
 import numpy as np
 
-from hfcdem.geometry import element_quality, plane_residual
-from hfcdem.scene import BoreholeSquare, CrackPlate, KGDStrip, SlabZone, SphereZone
+from hfcdem.config.scene import BoreholeSquare, CrackPlate, KGDStrip, SlabZone, SphereZone
+from hfcdem.mesh.block import element_quality, plane_residual
 
 Plate2D = CrackPlate | KGDStrip | BoreholeSquare
 Residual = Callable[[np.ndarray], np.ndarray]
@@ -109,7 +109,7 @@ def _add_zone(occ: Any, geom: Plate2D) -> tuple[int, int] | None:
     return (2, occ.addRectangle(corner[0], corner[1], 0.0, size[0], size[1]))
 
 
-def _curve_candidates(geom: Plate2D) -> list[tuple[str, Residual]]:
+def curve_candidates(geom: Plate2D) -> list[tuple[str, Residual]]:
     lo, hi = kept_rectangle(geom)
     out: list[tuple[str, Residual]] = []
     for i, axis in enumerate("xy"):
@@ -166,7 +166,7 @@ def build_plate(geom: Plate2D, model: Any) -> dict[str, Any]:
             cells = {"rock": sorted(of_plate)}
     occ.synchronize()
 
-    candidates = _curve_candidates(geom)
+    candidates = curve_candidates(geom)
     tol = 1e-6 * float(max(geom.plate.width, geom.plate.height))
     groups: dict[str, list[int]] = {}
     for _, curve in model.getEntities(1):
@@ -209,3 +209,12 @@ def build_plate(geom: Plate2D, model: Any) -> dict[str, Any]:
         "quality": element_quality(model, 2),
         "faces": {name: len(v) for name, v in sorted(groups.items())},
     }
+
+
+__all__ = [
+    "Plate2D",
+    "Residual",
+    "build_plate",
+    "expected_measures",
+    "kept_rectangle",
+]

@@ -1,0 +1,8 @@
+"""What a user runs: a scene end to end, a static load, a study, breakdown detection.
+
+``run`` meshes a scene, builds the solid and the fracture, steps it and writes
+the outputs; ``static`` solves a ``[load]`` scene once; ``study`` sweeps scene
+fields; ``breakdown`` finds the breakdown pressure in a pressure history.
+"""
+
+__all__: list[str] = []
