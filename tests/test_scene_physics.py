@@ -39,7 +39,8 @@ def test_a_minimal_physics_scene_is_complete_with_defaults():
     assert phys.injection.value_at(10.0) == pytest.approx(1e-7)
     assert phys.duration == pytest.approx(60.0)
     assert phys.fluid.viscosity == pytest.approx(1e-3)
-    assert phys.solver.fidelity == "uniform"
+    assert phys.solver.fidelity == "viscous"
+    assert phys.interfaces.break_rule == "most_overstressed"
     # what was assumed is listed, so a run can print it
     assert "fluid.viscosity" in phys.defaulted
     assert "rock.friction_angle" in phys.defaulted
@@ -113,3 +114,25 @@ def test_output_section():
         scene(output__pictures="yes")
     with pytest.raises(SceneError, match=r"output\.colour"):
         scene(output__colour="red")
+
+
+def test_every_default_has_one_home():
+    # a scene that says nothing gets what the library classes say, field by field
+    from hfcdem.config.physics import SolverSettings
+    from hfcdem.coupling.hydrofrac import FlowSettings
+    from hfcdem.flow.fluid import Fluid
+    from hfcdem.solid.interfaces import InterfaceModel
+
+    solver, flow, model = SolverSettings(), FlowSettings(cavity=("wall",)), InterfaceModel()
+    assert solver.fidelity == flow.fidelity
+    assert solver.filling == flow.filling
+    assert solver.time_step == flow.dt_initial
+    assert solver.max_time_step == flow.dt_max
+    assert solver.break_tolerance == flow.break_tolerance
+    assert solver.max_breaks_per_iteration == flow.max_breaks_per_iteration
+    assert solver.break_rule == model.break_rule
+    phys = scene().physics
+    assert phys.solver == solver
+    assert phys.fluid == Fluid()
+    assert phys.interfaces.alpha == model.alpha
+    assert phys.interfaces.friction_angle == pytest.approx(model.friction_angle)

@@ -47,12 +47,12 @@ them so a run's record can print what was assumed.  Any invalid field raises
     pictures = true             # PNG pictures of the fracture pattern (PyVista)
 
     [solver]
-    fidelity = "uniform"        # or "viscous"
+    fidelity = "viscous"        # or "uniform"
     filling = "saturation"      # or "no_lag"
     degree = 1                  # DG1 or DG2 blocks
-    time_step = "0.5 s"
-    max_time_step = "5 s"
-    break_rule = "all"
+    time_step = "10 ms"         # the first step
+    max_time_step = "inf s"     # no cap unless given
+    break_rule = "most_overstressed"  # or "all", "cap"
     max_breaks_per_iteration = 1
     strength_points = "vertices" # or "midpoint": where a spring's strength is checked
     break_tolerance = 0.01      # a step may overshoot the next break by this fraction
@@ -71,6 +71,13 @@ from hfcdem.flow.fluid import Fluid, Injection
 from hfcdem.solid.elastic import ElasticMaterial, InSituStress
 from hfcdem.solid.interfaces import InterfaceModel
 
+
+def field_default(cls: type, name: str) -> Any:
+    """Return the default of dataclass field ``name`` of ``cls``: the one home of a default."""
+    return cls.__dataclass_fields__[name].default  # type: ignore[attr-defined]
+
+
+WALL_JOINTS = ("dry", "wet", "permeated")
 PHYSICS_SECTIONS = ("rock", "stress", "fluid", "injection", "load", "solver", "output")
 
 # in-situ stresses below this are almost surely MPa values typed with "Pa"
@@ -80,14 +87,20 @@ _LARGEST_STRESS = 1e9  # Pa
 
 @dataclass(frozen=True)
 class SolverSettings:
-    """Numerical choices of a run (SI units)."""
+    """Numerical choices of a run (SI units).
 
-    fidelity: str = "uniform"
+    The defaults are the library's: those of :class:`FlowSettings`
+    (``fidelity``, ``filling``, ``dt_initial``, ``dt_max``, ``break_tolerance``),
+    :class:`InterfaceModel` (``break_rule``) and :class:`CDEMSolid`; a test holds
+    them equal.  The scene reader takes its defaults from these fields.
+    """
+
+    fidelity: str = "viscous"
     filling: str = "saturation"
     degree: int = 1
-    time_step: float = 0.5
-    max_time_step: float = 5.0
-    break_rule: str = "all"
+    time_step: float = 0.01
+    max_time_step: float = math.inf
+    break_rule: str = "most_overstressed"
     max_breaks_per_iteration: int | None = None
     strength_points: str = "vertices"
     break_tolerance: float = 0.01
@@ -121,9 +134,9 @@ class Physics:
     fluid: Fluid
     injection: Injection | None
     duration: float
-    initial_pressure: float
-    extra_volume: float
     solver: SolverSettings
+    initial_pressure: float = 0.0
+    extra_volume: float = 0.0
     wellbore: str = "cased"
     wall_film: float | None = None
     wall_joints: str = "dry"
@@ -148,6 +161,9 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
         return TomlTable(data.get(name, {}), name)
 
     def get(table: Any, key: str, kind: str, default: Any, **kw: Any) -> Any:
+        # default: a dataclass field, (cls, name), so each default has one home
+        if isinstance(default, tuple):
+            default = field_default(*default)
         if not table.has(key):
             defaulted.append(table.sub(key))
         if kind == "number":
@@ -169,10 +185,17 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
     c0 = rock.quantity("cohesion", "stress")
     for key, value in (("tensile_strength", t0), ("cohesion", c0)):
         check(value >= 0.0, f"rock.{key}", f"a strength must not be negative, got {value:g} Pa")
-    phi = math.degrees(get(rock, "friction_angle", "angle", math.radians(30.0)))
+    phi = math.degrees(
+        get(
+            rock,
+            "friction_angle",
+            "angle",
+            math.radians(field_default(InterfaceModel, "friction_angle")),
+        )
+    )
     check(0.0 <= phi < 90.0, "rock.friction_angle", f"expected 0 to 90 deg, got {phi:g} deg")
     weibull = rock.number("weibull_modulus", None) if rock.has("weibull_modulus") else None
-    alpha = get(rock, "spring_factor", "number", 100.0)
+    alpha = get(rock, "spring_factor", "number", (InterfaceModel, "alpha"))
     rock.finish()
 
     st = section("stress")
@@ -190,10 +213,10 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
 
     fl = section("fluid")
     fluid_kw = {
-        "viscosity": get(fl, "viscosity", "viscosity", 1e-3),
-        "bulk_modulus": get(fl, "bulk_modulus", "stress", 2.2e9),
-        "density": get(fl, "density", "density", 1000.0),
-        "residual_aperture": get(fl, "residual_aperture", "length", 0.0),
+        "viscosity": get(fl, "viscosity", "viscosity", (Fluid, "viscosity")),
+        "bulk_modulus": get(fl, "bulk_modulus", "stress", (Fluid, "bulk_modulus")),
+        "density": get(fl, "density", "density", (Fluid, "density")),
+        "residual_aperture": get(fl, "residual_aperture", "length", (Fluid, "residual_aperture")),
     }
     fl.finish()
 
@@ -251,13 +274,19 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
                 raise SceneError(inj.sub(given[0]), str(exc)) from None
         duration = inj.quantity("duration", "time")
         check(duration > 0.0, "injection.duration", f"must be positive, got {duration:g} s")
-        p0 = get(inj, "initial_pressure", "stress", 0.0)
-        extra = get(inj, "extra_volume", "number", 0.0)
+        p0 = get(inj, "initial_pressure", "stress", (Physics, "initial_pressure"))
+        extra = get(inj, "extra_volume", "number", (Physics, "extra_volume"))
         check(extra >= 0.0, "injection.extra_volume", f"must be >= 0 m3, got {extra!r}")
         # perforated wells are cased: only the tunnels are open hole
-        wellbore = get(inj, "wellbore", "string", "cased", choices=("cased", "open"))
+        wellbore = get(inj, "wellbore", "string", (Physics, "wellbore"), choices=("cased", "open"))
         film = inj.quantity("wall_film", "length") if inj.has("wall_film") else None
-        joints = get(inj, "wall_joints", "string", "dry", choices=("dry", "wet", "permeated"))
+        joints = get(
+            inj,
+            "wall_joints",
+            "string",
+            (Physics, "wall_joints"),
+            choices=("dry", "wet", "permeated"),
+        )
         rigid = inj.raw("rigid_cavity") if inj.has("rigid_cavity") else False
         check(
             isinstance(rigid, bool), "injection.rigid_cavity", f"expected true or false: {rigid!r}"
@@ -276,19 +305,31 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
         "output.interval",
         f"must be a positive time, got {interval!r} s",
     )
-    pictures = out.raw("pictures", True, "true or false") if out.has("pictures") else True
+    pictures = (
+        out.raw("pictures", True, "true or false")
+        if out.has("pictures")
+        else field_default(Physics, "pictures")
+    )
     check(isinstance(pictures, bool), "output.pictures", f"expected true or false: {pictures!r}")
     out.finish()
 
     so = section("solver")
     solver = SolverSettings(
-        fidelity=get(so, "fidelity", "string", "uniform", choices=("uniform", "viscous")),
-        filling=get(so, "filling", "string", "saturation", choices=("saturation", "no_lag")),
-        degree=get(so, "degree", "number", 1, integer=True),
-        time_step=get(so, "time_step", "time", 0.5),
-        max_time_step=get(so, "max_time_step", "time", 5.0),
+        fidelity=get(
+            so, "fidelity", "string", (SolverSettings, "fidelity"), choices=("uniform", "viscous")
+        ),
+        filling=get(
+            so, "filling", "string", (SolverSettings, "filling"), choices=("saturation", "no_lag")
+        ),
+        degree=get(so, "degree", "number", (SolverSettings, "degree"), integer=True),
+        time_step=get(so, "time_step", "time", (SolverSettings, "time_step")),
+        max_time_step=get(so, "max_time_step", "time", (SolverSettings, "max_time_step")),
         break_rule=get(
-            so, "break_rule", "string", "all", choices=("all", "most_overstressed", "cap")
+            so,
+            "break_rule",
+            "string",
+            (SolverSettings, "break_rule"),
+            choices=("all", "most_overstressed", "cap"),
         ),
         max_breaks_per_iteration=(
             so.number("max_breaks_per_iteration", integer=True)
@@ -296,11 +337,19 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             else None
         ),
         strength_points=get(
-            so, "strength_points", "string", "vertices", choices=("vertices", "midpoint")
+            so,
+            "strength_points",
+            "string",
+            (SolverSettings, "strength_points"),
+            choices=("vertices", "midpoint"),
         ),
-        break_tolerance=get(so, "break_tolerance", "number", 0.01),
+        break_tolerance=get(so, "break_tolerance", "number", (SolverSettings, "break_tolerance")),
         linear_solver=get(
-            so, "linear_solver", "string", "auto", choices=("auto", "direct", "iterative")
+            so,
+            "linear_solver",
+            "string",
+            (SolverSettings, "linear_solver"),
+            choices=("auto", "direct", "iterative"),
         ),
     )
     check(
