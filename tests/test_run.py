@@ -9,6 +9,7 @@ from hfcdem.analytic import kgd_viscosity
 from hfcdem.cli import main
 from hfcdem.config.scene import SceneError, load_scene, parse_scene
 from hfcdem.io.series import read_pvd
+from hfcdem.workflows.observers import StepObserver
 from hfcdem.workflows.run import OutputInUse, pressurised_groups, run_scene
 
 KGD = "meshes/scenes/kgd_strip.toml"
@@ -65,26 +66,53 @@ class _Interrupt(Exception):
     pass
 
 
+class StopAt(StepObserver):
+    """Interrupt a run after the step that reaches ``time`` (as Ctrl-C would)."""
+
+    def __init__(self, time):
+        self.time = time
+
+    def step(self, frac, rec):
+        if rec.time >= self.time:
+            raise _Interrupt
+
+
 def _straight_and_stopped(tmp):
     """Run KGD to the end into tmp/straight, and again into tmp/resumed stopped at 4 s."""
     scene = load_scene(KGD, "coarse")
     straight = tmp / "straight"
     run_scene(scene, straight)
-
-    def stop_after_four_seconds(msg):
-        if msg.startswith("t ") and float(msg.split()[1]) >= 4.0:
-            raise _Interrupt
-
     out = tmp / "resumed"
     with pytest.raises(_Interrupt):
-        run_scene(scene, out, say=stop_after_four_seconds)
+        run_scene(scene, out, observers=[StopAt(4.0)])
     return scene, straight, out
+
+
+def test_a_resume_on_another_mesh_is_refused(shared_tmp_path):
+    scene = load_scene(KGD, "coarse")
+    out = shared_tmp_path / "stopped"
+    with pytest.raises(_Interrupt):
+        run_scene(scene, out, observers=[StopAt(1.0)])
+    finer = load_scene(KGD)  # the default resolution: another mesh
+    with pytest.raises(SceneError, match="another mesh"):
+        run_scene(finer, out, resume=True, force=True)
+    # nothing written before is lost
+    assert json.loads((out / "checkpoint.json").read_text())["steps"] > 0
 
 
 def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
     scene, straight, out = _straight_and_stopped(shared_tmp_path)
     kept = (out / "history.csv").read_text().splitlines()
     assert 2 < len(kept) < len((straight / "history.csv").read_text().splitlines())
+    # the checkpoint holds the state, the history is in history.csv, appended step by step
+    data = json.loads((out / "checkpoint.json").read_text())
+    assert "history" not in data
+    assert data["steps"] == len(kept) - 1
+    header, straight_rows = kept[0].split(","), (straight / "history.csv").read_text().splitlines()
+    t = header.index("time")
+    assert [r.split(",")[t] for r in kept[1:]] == [
+        r.split(",")[t] for r in straight_rows[1 : len(kept)]
+    ]
     frames_before = read_pvd(out / "interfaces.pvd")
     summary = run_scene(scene, out, resume=True)
     assert summary["simulated_time_s"] == pytest.approx(10.0)

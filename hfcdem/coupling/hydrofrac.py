@@ -34,7 +34,8 @@ import math
 import os
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
+from typing import Any
 
 import dolfinx
 import dolfinx.fem.petsc
@@ -159,6 +160,15 @@ class StepRecord:
     def as_row(self) -> dict[str, float]:
         """Return the record as a flat dict (the columns of history.csv)."""
         return dict(self.__dict__)
+
+    @classmethod
+    def from_row(cls, row: dict[str, float]) -> StepRecord:
+        """Return the record of a row of history.csv (counts back to integers)."""
+        kinds = {f.name: f.type for f in fields(cls)}
+        values: dict[str, Any] = {
+            k: int(v) if kinds[k] in (int, "int") else float(v) for k, v in row.items()
+        }
+        return cls(**values)
 
 
 def relative_permeability(saturation: np.ndarray) -> np.ndarray:
@@ -1191,11 +1201,14 @@ class HydraulicFracture:
                 [k, (v if math.isfinite(v) else None)] for k, v in table(self._wet_since)
             ],
             "pressure": table(self._pressure),
-            "history": [r.as_row() for r in self.history],
         }
 
-    def restore(self, data: dict) -> None:
-        """Continue from a :meth:`checkpoint` (collective)."""
+    def restore(self, data: dict, history: list[StepRecord] | None = None) -> None:
+        """Continue from a :meth:`checkpoint` (collective), with the ``history`` so far.
+
+        The checkpoint holds the state only; the step records come from
+        ``history.csv`` (or an older checkpoint's ``history``).
+        """
         solid = self.solid
         ids = np.sort(np.asarray(solid.vertex_ids, dtype=np.int64), axis=1)
         local: dict[tuple[int, ...], int] = {
@@ -1214,7 +1227,9 @@ class HydraulicFracture:
             tuple(k): (math.inf if v is None else float(v)) for k, v in data["wet_since"]
         }
         self._pressure = {tuple(k): float(v) for k, v in data["pressure"]}
-        self.history = [StepRecord(**row) for row in data["history"]]
+        if history is None:
+            history = [StepRecord.from_row(row) for row in data.get("history", [])]
+        self.history = list(history)
         self._rebuild()
 
     def write_history(self, path: str | os.PathLike[str]) -> None:

@@ -9,8 +9,9 @@ else the ``fracturable`` cell group, else the whole rock.  The cavity is every
 ``wellbore*`` and ``perforation*`` facet group; a scene without one injects
 at its injection point.
 
-Written into DIR (rank 0, atomically): ``run.json`` at the start (the scene and
-its defaults), ``history.csv`` after every step, and at the end
+Written into DIR (rank 0): ``run.json`` at the start (the scene and its
+defaults), a row of ``history.csv`` and ``checkpoint.json`` (the state, not the
+history) after every step (:mod:`hfcdem.workflows.observers`), and at the end
 ``summary.json``, ``pressure.png`` (the injection pressure with the breakdown
 marked) and ``fracture.vtu`` (fluid pressure, aperture, saturation and state per
 fracture facet).  Over time, for ParaView (:mod:`hfcdem.io.series`): ``fields.bp``
@@ -22,9 +23,8 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -33,12 +33,27 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem.config.scene import Scene, SceneError
-from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
+from hfcdem.coupling.hydrofrac import (
+    FlowSettings,
+    HydraulicFracture,
+    SimulationStopped,
+    StepRecord,
+)
 from hfcdem.info import versions
 from hfcdem.io.files import prepare_output_dir, to_builtin, write_interfaces, write_json
-from hfcdem.io.series import FieldSeries, output_times
+from hfcdem.io.history import HistoryFile
+from hfcdem.io.series import FieldSeries
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.workflows.breakdown import detect_breakdown
+from hfcdem.workflows.observers import (
+    CheckpointWriter,
+    FirstCrack,
+    FrameWriter,
+    HistoryWriter,
+    ProgressLine,
+    StepObserver,
+    mesh_fingerprint,
+)
 
 ROLLER_AXES = {"symmetry_x": 0, "symmetry_y": 1, "symmetry_z": 2}
 
@@ -160,11 +175,15 @@ def run_scene(
     force: bool = False,
     say: Callable[[str], None] | None = None,
     resume: bool = False,
+    observers: Sequence[StepObserver] = (),
 ) -> dict[str, Any]:
     """Run ``scene`` and write its results into ``output``; return the summary.
 
     ``resume``: continue from ``checkpoint.json`` of an earlier, stopped run of
-    the same scene in ``output`` (written after every step).
+    the same scene and mesh in ``output`` (written after every step).
+    ``observers`` see every step after the built-in ones (history, checkpoint,
+    frames, progress); an exception raised by one stops the run, keeping what
+    was written.
     """
     from hfcdem.mesh.build import create_scene_mesh
 
@@ -220,59 +239,26 @@ def run_scene(
 
         return run_static(scene, solid, out, say, record)
     frac = build_fracture(scene, solid)
-    checkpoint = out / "checkpoint.json"
-    first: dict[str, Any] | None = None  # where the first crack broke, once it has
+    fingerprint = mesh_fingerprint(tmesh)
+    first = FirstCrack(lambda f: _first_crack(scene, f))
     if resume:
-        data = comm.bcast(
-            json.loads(checkpoint.read_text()) if comm.rank == 0 and checkpoint.exists() else None,
-            root=0,
-        )
-        if data is None:
-            say("nothing to resume: no checkpoint.json; starting from t = 0")
-        else:
-            frac.restore(data)
-            first = data.get("first_crack")  # the break events themselves are not kept
-            say(f"resumed at t = {frac.t:.6g} s ({len(frac.history)} steps done)")
+        _resume(frac, out, fingerprint, first, say, comm)
     resumed = bool(frac.history)
     if not resumed:
         failed = frac.settle()
         if failed:
             say(f"initial state: {failed} interfaces fail before injection (excavation)")
-    stopped = None
     t_end = phys.duration
     series = FieldSeries(out, frac, resume_from=frac.t if resumed else None)
-    interval = phys.output_interval or t_end / 20.0
-    next_frame = iter(output_times(frac.t, t_end, interval))
-    due = next(next_frame, math.inf)
-    if not resumed:
-        series.write(0.0)
-    try:
-        while frac.t < t_end * (1.0 - 1e-12):
-            frac.dt = min(frac.dt, t_end - frac.t)
-            rec = frac.step()
-            frac.write_history(out / "history.csv")
-            if first is None and frac.first_break_time is not None:
-                first = _first_crack(scene, frac)
-            write_json(checkpoint, frac.checkpoint() | {"first_crack": first}, comm)
-            if rec.time >= due * (1.0 - 1e-12):
-                series.write(rec.time)
-                while due <= rec.time * (1.0 + 1e-12):
-                    due = next(next_frame, math.inf)
-            eta = rec.wall_time / rec.time * (t_end - rec.time) if rec.time > 0 else math.nan
-            say(
-                f"t {rec.time:8.4g} s  p {rec.injection_pressure / 1e6:8.3f} MPa  "
-                f"broken {rec.tensile + rec.shear:5d}  dt {rec.dt:8.3g} s  "
-                f"wall {rec.wall_time:6.1f} s  eta {eta:6.1f} s"
-            )
-    except SimulationStopped as exc:
-        stopped = str(exc)
-        say(f"stopped: {exc}")
-    finally:
-        if frac.history:
-            frac.write_history(out / "history.csv")
-    if stopped is not None and series.frames and series.frames[-1][0] < frac.t:
-        series.write(frac.t)  # the state the run stopped in
-    series.close()
+    watchers: list[StepObserver] = [
+        HistoryWriter(out / "history.csv", comm),
+        first,
+        CheckpointWriter(out / "checkpoint.json", fingerprint, first, comm),
+        FrameWriter(series, t_end, phys.output_interval or t_end / 20.0, fresh=not resumed),
+        ProgressLine(say, t_end),
+        *observers,
+    ]
+    stopped = _step_until(frac, t_end, watchers, say)
     # the curve starts from the initial state, so the rise to the peak is measured from it
     times = [0.0] + [r.time for r in frac.history]
     pressures = [phys.initial_pressure] + [r.injection_pressure for r in frac.history]
@@ -288,7 +274,7 @@ def run_scene(
         "first_crack_time_s": frac.first_break_time,
         "first_crack_pressure_MPa": _first_crack_pressure(frac),
         "initial_failures": frac.initial_failures,
-        "first_crack": first if first is not None else _first_crack(scene, frac),
+        "first_crack": first.where if first.where is not None else _first_crack(scene, frac),
         "fracture_degree": solid.fracture_degree(),
         "tensile_failures": counts["tensile"],
         "shear_failures": counts["shear"],
@@ -307,6 +293,66 @@ def run_scene(
         _picture_fracture(out / "fracture.png", scene, frac)
     comm.barrier()
     return summary
+
+
+def _resume(
+    frac: HydraulicFracture,
+    out: Path,
+    fingerprint: str,
+    first: FirstCrack,
+    say: Callable[[str], None],
+    comm: MPI.Comm,
+) -> None:
+    """Restore a stopped run from ``checkpoint.json`` and ``history.csv`` (collective)."""
+    checkpoint = out / "checkpoint.json"
+    data = comm.bcast(
+        json.loads(checkpoint.read_text()) if comm.rank == 0 and checkpoint.exists() else None,
+        root=0,
+    )
+    if data is None:
+        say("nothing to resume: no checkpoint.json; starting from t = 0")
+        return
+    if data.get("mesh") != fingerprint:
+        raise SceneError(
+            "",
+            f"{checkpoint} was written on another mesh (fingerprint {data.get('mesh')}, "
+            f"now {fingerprint}): resume with the scene, resolution and --set values of "
+            "the stopped run, or start again with --force",
+        )
+    steps = int(data["steps"])
+    rows = HistoryFile(out / "history.csv", (), comm).read(limit=steps)
+    if len(rows) < steps:
+        raise SceneError(
+            "", f"{out / 'history.csv'} holds {len(rows)} steps, the checkpoint {steps}"
+        )
+    frac.restore(data, history=[StepRecord.from_row(r) for r in rows])
+    first.where = data.get("first_crack")  # the break events themselves are not kept
+    say(f"resumed at t = {frac.t:.6g} s ({steps} steps done)")
+
+
+def _step_until(
+    frac: HydraulicFracture,
+    t_end: float,
+    watchers: Sequence[StepObserver],
+    say: Callable[[str], None],
+) -> str | None:
+    """Step to ``t_end``, handing each record to the observers; return why it stopped."""
+    stopped = None
+    for w in watchers:
+        w.start(frac)
+    try:
+        while frac.t < t_end * (1.0 - 1e-12):
+            frac.dt = min(frac.dt, t_end - frac.t)
+            rec = frac.step()
+            for w in watchers:
+                w.step(frac, rec)
+    except SimulationStopped as exc:
+        stopped = str(exc)
+        say(f"stopped: {exc}")
+    finally:
+        for w in watchers:
+            w.finish(frac, stopped)
+    return stopped
 
 
 def _picture_fracture(path: Path, scene: Scene, frac: HydraulicFracture) -> None:
