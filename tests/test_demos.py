@@ -4,8 +4,11 @@ import importlib.util
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 from mpi4py import MPI
+
+from hfcdem import read_results
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
@@ -65,6 +68,12 @@ def test_perforation_no2_demo_runs_the_scene_and_names_its_files(shared_tmp_path
     assert summary["simulated_time_s"] == pytest.approx(1.0)
     assert summary["stopped"] is None
     assert summary["initial_failures"] >= 0
+    # pumping into the closed cavity raises the pressure from the 30 MPa start, step by step
+    history = read_results(out).history
+    pressure = history["injection_pressure"]
+    assert len(pressure) >= 2 and pressure[0] > 30e6
+    assert np.all(np.diff(pressure) > 0.0)
+    assert summary["peak_pressure_MPa"] == pytest.approx(pressure.max() / 1e6)
     for name in ("summary.json", "history.csv", "pressure.png", "fracture.png", "interfaces.pvd"):
         assert (out / name).stat().st_size > 0, name
     assert (out / "fields.bp").is_dir()
@@ -94,6 +103,10 @@ def test_shape_study_demo_sweeps_profiles_and_checks_orderings(shared_tmp_path, 
     assert [r["value"] for r in rows] == ["no2", "1-2"]
     lines = (out / "results.csv").read_text().splitlines()
     assert lines[1].startswith("no2,0,") and lines[2].startswith("1-2,1,")
+    # each case ran its scene: the pressure rose from the 30 MPa start
+    for row in rows:
+        assert row["peak_pressure_MPa"] > 30.0
+        assert row["stopped"] is None
     printed = capsys.readouterr().out
     if MPI.COMM_WORLD.rank == 0:  # only rank 0 prints
         assert "paper 64.01 MPa" in printed and "paper 53.86 MPa" in printed

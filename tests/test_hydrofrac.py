@@ -81,8 +81,10 @@ def test_kgd_viscosity_dominated_within_10_percent(stress):
 def test_kgd_mass_balance_every_step():
     hf = _kgd_run(0.0)
     assert len(hf.history) >= 20
-    assert max(r.mass_error for r in hf.history) < 1e-6
-    assert max(r.volume_mismatch for r in hf.history) < 1e-6
+    # mass_error is bookkeeping, exact by construction (1e-13 measured); the solver's
+    # true residual is volume_mismatch: 5e-11 of the injected volume measured
+    assert max(r.mass_error for r in hf.history) < 1e-11
+    assert max(r.volume_mismatch for r in hf.history) < 1e-9
     # the fluid is in the fracture (no cavity volume at a KGD inlet)
     last = hf.history[-1]
     assert last.fracture_fluid == pytest.approx(last.injected_volume, rel=1e-6)
@@ -121,7 +123,8 @@ def test_leak_off_is_balanced_and_shortens_the_fracture():
     leaky.run(4.0)
     last = leaky.history[-1]
     assert last.leaked_volume > 0.05 * last.injected_volume
-    assert max(r.mass_error for r in leaky.history) < 1e-6
+    assert max(r.mass_error for r in leaky.history) < 1e-11
+    assert max(r.volume_mismatch for r in leaky.history) < 1e-9  # 5.4e-11 measured
     assert last.fracture_fluid + last.leaked_volume == pytest.approx(last.injected_volume, rel=1e-6)
     assert leaky.wet_extent((0, 0), (1, 0)) <= plain.wet_extent((0, 0), (1, 0))
 
