@@ -67,6 +67,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from hfcdem.config.scene import SceneError, TomlTable
 from hfcdem.flow.fluid import Fluid, Injection
 from hfcdem.solid.elastic import ElasticMaterial, InSituStress
 from hfcdem.solid.interfaces import InterfaceModel
@@ -151,84 +152,145 @@ class Physics:
             raise ValueError("a scene has exactly one of [injection] and [load]")
 
 
-def parse_physics(data: Mapping[str, Any]) -> Physics:
-    """Read the physics sections of a parsed scene document (see the module docstring)."""
-    from hfcdem.config.scene import SceneError, TomlTable
+class _Reader:
+    """The scene document and the list of fields it left to their defaults."""
 
-    defaulted: list[str] = []
+    def __init__(self, data: Mapping[str, Any]) -> None:
+        self.data = data
+        self.defaulted: list[str] = []
 
-    def section(name: str) -> Any:
-        return TomlTable(data.get(name, {}), name)
+    def section(self, name: str) -> TomlTable:
+        return TomlTable(self.data.get(name, {}), name)
 
-    def get(table: Any, key: str, kind: str, default: Any, **kw: Any) -> Any:
+    def get(self, table: TomlTable, key: str, kind: str, default: Any, **kw: Any) -> Any:
         # default: a dataclass field, (cls, name), so each default has one home
         if isinstance(default, tuple):
             default = field_default(*default)
         if not table.has(key):
-            defaulted.append(table.sub(key))
+            self.defaulted.append(table.sub(key))
         if kind == "number":
             return table.number(key, default, **kw)
         if kind == "string":
             return table.string(key, default, **kw)
         return table.quantity(key, kind, default)
 
-    def check(ok: bool, path: str, reason: str) -> None:
-        if not ok:
-            raise SceneError(path, reason)
 
-    rock = section("rock")
+def _check(ok: bool, path: str, reason: str) -> None:
+    if not ok:
+        raise SceneError(path, reason)
+
+
+def _read_rock(r: _Reader) -> tuple[ElasticMaterial, dict[str, Any]]:
+    """[rock]: the elastic material and the interface model's fields."""
+    rock = r.section("rock")
     e = rock.quantity("youngs_modulus", "stress")
     nu = rock.number("poisson_ratio")
-    check(1e6 <= e <= 1e13, "rock.youngs_modulus", f"expected 1 MPa to 10 TPa, got {e:g} Pa")
-    check(-1.0 < nu < 0.5, "rock.poisson_ratio", f"expected a value in (-1, 0.5), got {nu!r}")
+    _check(1e6 <= e <= 1e13, "rock.youngs_modulus", f"expected 1 MPa to 10 TPa, got {e:g} Pa")
+    _check(-1.0 < nu < 0.5, "rock.poisson_ratio", f"expected a value in (-1, 0.5), got {nu!r}")
     t0 = rock.quantity("tensile_strength", "stress")
     c0 = rock.quantity("cohesion", "stress")
     for key, value in (("tensile_strength", t0), ("cohesion", c0)):
-        check(value >= 0.0, f"rock.{key}", f"a strength must not be negative, got {value:g} Pa")
+        _check(value >= 0.0, f"rock.{key}", f"a strength must not be negative, got {value:g} Pa")
     phi = math.degrees(
-        get(
+        r.get(
             rock,
             "friction_angle",
             "angle",
             math.radians(field_default(InterfaceModel, "friction_angle")),
         )
     )
-    check(0.0 <= phi < 90.0, "rock.friction_angle", f"expected 0 to 90 deg, got {phi:g} deg")
+    _check(0.0 <= phi < 90.0, "rock.friction_angle", f"expected 0 to 90 deg, got {phi:g} deg")
     weibull = rock.number("weibull_modulus", None) if rock.has("weibull_modulus") else None
-    alpha = get(rock, "spring_factor", "number", (InterfaceModel, "alpha"))
+    alpha = r.get(rock, "spring_factor", "number", (InterfaceModel, "alpha"))
     rock.finish()
 
-    st = section("stress")
+    model = {
+        "alpha": alpha,
+        "tensile_strength": t0,
+        "cohesion": c0,
+        "friction_angle": phi,
+        "weibull_modulus": weibull,
+    }
+    return ElasticMaterial(e, nu), model
+
+
+def _read_stress(r: _Reader) -> InSituStress:
+    """[stress]: the in-situ principal stresses (compression positive) and SH's azimuth."""
+    st = r.section("stress")
     stresses = {}
     for key in ("sh_max", "sh_min", "sv"):
         value = st.quantity(key, "stress")
-        check(
+        _check(
             value == 0.0 or _SMALLEST_STRESS <= abs(value) <= _LARGEST_STRESS,
             f"stress.{key}",
             f"{value:g} Pa is not a plausible in-situ stress (1 kPa to 1 GPa); did you mean MPa?",
         )
         stresses[key] = value
-    azimuth = math.degrees(get(st, "azimuth", "angle", 0.0))
+    azimuth = math.degrees(r.get(st, "azimuth", "angle", 0.0))
     st.finish()
 
-    fl = section("fluid")
+    return InSituStress(
+        sh_max=stresses["sh_max"],
+        sh_min=stresses["sh_min"],
+        sv=stresses["sv"],
+        azimuth_sh=azimuth,
+    )
+
+
+def _read_fluid(r: _Reader) -> Fluid:
+    """[fluid]: the injected fluid."""
+    fl = r.section("fluid")
     fluid_kw = {
-        "viscosity": get(fl, "viscosity", "viscosity", (Fluid, "viscosity")),
-        "bulk_modulus": get(fl, "bulk_modulus", "stress", (Fluid, "bulk_modulus")),
-        "density": get(fl, "density", "density", (Fluid, "density")),
-        "residual_aperture": get(fl, "residual_aperture", "length", (Fluid, "residual_aperture")),
+        "viscosity": r.get(fl, "viscosity", "viscosity", (Fluid, "viscosity")),
+        "bulk_modulus": r.get(fl, "bulk_modulus", "stress", (Fluid, "bulk_modulus")),
+        "density": r.get(fl, "density", "density", (Fluid, "density")),
+        "residual_aperture": r.get(fl, "residual_aperture", "length", (Fluid, "residual_aperture")),
     }
     fl.finish()
 
-    static = "load" in data
-    if static and "injection" in data:
+    return Fluid(**fluid_kw)
+
+
+def _read_schedule(inj: TomlTable) -> Injection:
+    """Exactly one of ``rate``, ``rate_schedule`` (time, rate) or ``pressure_schedule``."""
+    from hfcdem.config.units import parse_quantity
+
+    given = [k for k in ("rate", "rate_schedule", "pressure_schedule") if inj.has(k)]
+    _check(
+        len(given) == 1,
+        "injection",
+        "give exactly one of rate, rate_schedule, pressure_schedule"
+        + (f" (got {', '.join(given)})" if given else ""),
+    )
+    if given[0] == "rate":
+        return Injection.constant_rate(inj.quantity("rate", "flow_rate"))
+    points = inj.raw(given[0])
+    dim = "flow_rate" if given[0] == "rate_schedule" else "stress"
+    _check(isinstance(points, list) and len(points) > 0, inj.sub(given[0]), "expected a list")
+    pairs = []
+    for i, pt in enumerate(points):
+        path = f"{inj.sub(given[0])}[{i}]"
+        _check(isinstance(pt, list) and len(pt) == 2, path, "expected [time, value]")
+        pairs.append((parse_quantity(pt[0], "time", path), parse_quantity(pt[1], dim, path)))
+    try:
+        if given[0] == "rate_schedule":
+            return Injection.rate_schedule(pairs)
+        return Injection.pressure_schedule(pairs)
+    except ValueError as exc:
+        raise SceneError(inj.sub(given[0]), str(exc)) from None
+
+
+def _read_pump(r: _Reader) -> dict[str, Any]:
+    """[injection] (a coupled run) or [load] (one static solve): Physics' fields."""
+    static = "load" in r.data
+    if static and "injection" in r.data:
         raise SceneError(
             "load", "give [injection] (a coupled run) or [load] (one static solve), not both"
         )
     if static:
-        ld = section("load")
+        ld = r.section("load")
         pressure = ld.quantity("crack_pressure", "stress")
-        check(
+        _check(
             abs(pressure) <= _LARGEST_STRESS,
             "load.crack_pressure",
             f"expected -1 GPa to 1 GPa, got {pressure:g} Pa",
@@ -239,48 +301,19 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
         film, joints, rigid = None, "dry", False
     else:
         load = None
-        inj = section("injection")
-        given = [k for k in ("rate", "rate_schedule", "pressure_schedule") if inj.has(k)]
-        check(
-            len(given) == 1,
-            "injection",
-            "give exactly one of rate, rate_schedule, pressure_schedule"
-            + (f" (got {', '.join(given)})" if given else ""),
-        )
-        if given[0] == "rate":
-            injection = Injection.constant_rate(inj.quantity("rate", "flow_rate"))
-        else:
-            points = inj.raw(given[0])
-            dim = "flow_rate" if given[0] == "rate_schedule" else "stress"
-            from hfcdem.config.units import parse_quantity
-
-            check(
-                isinstance(points, list) and len(points) > 0, inj.sub(given[0]), "expected a list"
-            )
-            pairs = []
-            for i, pt in enumerate(points):
-                path = f"{inj.sub(given[0])}[{i}]"
-                check(isinstance(pt, list) and len(pt) == 2, path, "expected [time, value]")
-                pairs.append(
-                    (parse_quantity(pt[0], "time", path), parse_quantity(pt[1], dim, path))
-                )
-            try:
-                injection = (
-                    Injection.rate_schedule(pairs)
-                    if given[0] == "rate_schedule"
-                    else Injection.pressure_schedule(pairs)
-                )
-            except ValueError as exc:
-                raise SceneError(inj.sub(given[0]), str(exc)) from None
+        inj = r.section("injection")
+        injection = _read_schedule(inj)
         duration = inj.quantity("duration", "time")
-        check(duration > 0.0, "injection.duration", f"must be positive, got {duration:g} s")
-        p0 = get(inj, "initial_pressure", "stress", (Physics, "initial_pressure"))
-        extra = get(inj, "extra_volume", "number", (Physics, "extra_volume"))
-        check(extra >= 0.0, "injection.extra_volume", f"must be >= 0 m3, got {extra!r}")
+        _check(duration > 0.0, "injection.duration", f"must be positive, got {duration:g} s")
+        p0 = r.get(inj, "initial_pressure", "stress", (Physics, "initial_pressure"))
+        extra = r.get(inj, "extra_volume", "number", (Physics, "extra_volume"))
+        _check(extra >= 0.0, "injection.extra_volume", f"must be >= 0 m3, got {extra!r}")
         # perforated wells are cased: only the tunnels are open hole
-        wellbore = get(inj, "wellbore", "string", (Physics, "wellbore"), choices=("cased", "open"))
+        wellbore = r.get(
+            inj, "wellbore", "string", (Physics, "wellbore"), choices=("cased", "open")
+        )
         film = inj.quantity("wall_film", "length") if inj.has("wall_film") else None
-        joints = get(
+        joints = r.get(
             inj,
             "wall_joints",
             "string",
@@ -288,19 +321,34 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             choices=("dry", "wet", "permeated"),
         )
         rigid = inj.raw("rigid_cavity") if inj.has("rigid_cavity") else False
-        check(
+        _check(
             isinstance(rigid, bool), "injection.rigid_cavity", f"expected true or false: {rigid!r}"
         )
-        check(
+        _check(
             film is None or 0.0 < film <= 1e-2,
             "injection.wall_film",
             f"expected a thickness in (0, 10 mm], got {film!r} m",
         )
         inj.finish()
 
-    out = section("output")
+    return {
+        "injection": injection,
+        "duration": duration,
+        "initial_pressure": p0,
+        "extra_volume": float(extra),
+        "wellbore": wellbore,
+        "wall_film": film,
+        "wall_joints": joints,
+        "rigid_cavity": rigid,
+        "load": load,
+    }
+
+
+def _read_output(r: _Reader) -> dict[str, Any]:
+    """[output]: the frame interval and whether to draw pictures."""
+    out = r.section("output")
     interval = out.quantity("interval", "time") if out.has("interval") else None
-    check(
+    _check(
         interval is None or interval > 0.0,
         "output.interval",
         f"must be a positive time, got {interval!r} s",
@@ -310,21 +358,26 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
         if out.has("pictures")
         else field_default(Physics, "pictures")
     )
-    check(isinstance(pictures, bool), "output.pictures", f"expected true or false: {pictures!r}")
+    _check(isinstance(pictures, bool), "output.pictures", f"expected true or false: {pictures!r}")
     out.finish()
 
-    so = section("solver")
+    return {"output_interval": interval, "pictures": pictures}
+
+
+def _read_solver(r: _Reader) -> SolverSettings:
+    """[solver]: the numerical choices."""
+    so = r.section("solver")
     solver = SolverSettings(
-        fidelity=get(
+        fidelity=r.get(
             so, "fidelity", "string", (SolverSettings, "fidelity"), choices=("uniform", "viscous")
         ),
-        filling=get(
+        filling=r.get(
             so, "filling", "string", (SolverSettings, "filling"), choices=("saturation", "no_lag")
         ),
-        degree=get(so, "degree", "number", (SolverSettings, "degree"), integer=True),
-        time_step=get(so, "time_step", "time", (SolverSettings, "time_step")),
-        max_time_step=get(so, "max_time_step", "time", (SolverSettings, "max_time_step")),
-        break_rule=get(
+        degree=r.get(so, "degree", "number", (SolverSettings, "degree"), integer=True),
+        time_step=r.get(so, "time_step", "time", (SolverSettings, "time_step")),
+        max_time_step=r.get(so, "max_time_step", "time", (SolverSettings, "max_time_step")),
+        break_rule=r.get(
             so,
             "break_rule",
             "string",
@@ -336,15 +389,15 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             if so.has("max_breaks_per_iteration")
             else None
         ),
-        strength_points=get(
+        strength_points=r.get(
             so,
             "strength_points",
             "string",
             (SolverSettings, "strength_points"),
             choices=("vertices", "midpoint"),
         ),
-        break_tolerance=get(so, "break_tolerance", "number", (SolverSettings, "break_tolerance")),
-        linear_solver=get(
+        break_tolerance=r.get(so, "break_tolerance", "number", (SolverSettings, "break_tolerance")),
+        linear_solver=r.get(
             so,
             "linear_solver",
             "string",
@@ -352,48 +405,39 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             choices=("auto", "direct", "iterative"),
         ),
     )
-    check(
+    _check(
         0.0 < solver.break_tolerance <= 1.0,
         "solver.break_tolerance",
         f"expected a fraction in (0, 1], got {solver.break_tolerance!r}",
     )
-    check(solver.degree in (1, 2), "solver.degree", f"expected 1 or 2, got {solver.degree!r}")
+    _check(solver.degree in (1, 2), "solver.degree", f"expected 1 or 2, got {solver.degree!r}")
     for key in ("time_step", "max_time_step"):
         value = getattr(solver, key)
-        check(value > 0.0, f"solver.{key}", f"must be a positive time, got {value:g} s")
+        _check(value > 0.0, f"solver.{key}", f"must be a positive time, got {value:g} s")
     so.finish()
 
-    try:
+    return solver
+
+
+def parse_physics(data: Mapping[str, Any]) -> Physics:
+    """Read the physics sections of a parsed scene document (see the module docstring)."""
+    r = _Reader(data)
+    try:  # the readers' own checks name the key; the dataclasses check ranges too
+        rock, model = _read_rock(r)
+        stress = _read_stress(r)
+        fluid = _read_fluid(r)
+        pump = _read_pump(r)
+        output = _read_output(r)
+        solver = _read_solver(r)
         return Physics(
-            rock=ElasticMaterial(e, nu),
-            interfaces=InterfaceModel(
-                alpha=alpha,
-                tensile_strength=t0,
-                cohesion=c0,
-                friction_angle=phi,
-                weibull_modulus=weibull,
-                break_rule=solver.break_rule,
-            ),
-            stress=InSituStress(
-                sh_max=stresses["sh_max"],
-                sh_min=stresses["sh_min"],
-                sv=stresses["sv"],
-                azimuth_sh=azimuth,
-            ),
-            fluid=Fluid(**fluid_kw),
-            injection=injection,
-            duration=duration,
-            initial_pressure=p0,
-            extra_volume=float(extra),
+            rock=rock,
+            interfaces=InterfaceModel(**model, break_rule=solver.break_rule),
+            stress=stress,
+            fluid=fluid,
             solver=solver,
-            wellbore=wellbore,
-            wall_film=film,
-            wall_joints=joints,
-            rigid_cavity=rigid,
-            output_interval=interval,
-            pictures=pictures,
-            load=load,
-            defaulted=tuple(defaulted),
+            **pump,
+            **output,
+            defaulted=tuple(r.defaulted),
         )
     except ValueError as exc:  # a range the dataclasses check themselves
         raise SceneError("", str(exc)) from None
