@@ -199,19 +199,7 @@ def run_scene(
     _claim_output(out, scene, force, comm)
     out = prepare_output_dir(out, comm)
     phys = scene.physics
-    write_json(
-        out / "run.json",
-        {
-            "scene": scene.name,
-            "fingerprint": scene_fingerprint(scene),
-            "source": scene.source,
-            "resolution": scene.resolution,
-            "physics": _jsonable(asdict(phys)),
-            "defaults_used": list(phys.defaulted),
-            "ranks": comm.size,
-        },
-        comm,
-    )
+    _write_run_record(out, scene, comm)
     if phys.defaulted:
         say("defaults: " + ", ".join(phys.defaulted))
     sm = create_scene_mesh(scene, comm)
@@ -238,8 +226,37 @@ def run_scene(
         from hfcdem.workflows.static import run_static
 
         return run_static(scene, solid, out, say, record)
+    return _run_coupled(scene, solid, out, say, record, resume, observers)
+
+
+def _write_run_record(out: Path, scene: Scene, comm: MPI.Comm) -> None:
+    """``run.json``: what is about to run, written before anything is meshed."""
+    phys = scene.physics
+    record = {
+        "scene": scene.name,
+        "fingerprint": scene_fingerprint(scene),
+        "source": scene.source,
+        "resolution": scene.resolution,
+        "physics": _jsonable(asdict(phys)),
+        "defaults_used": list(phys.defaulted),
+        "ranks": comm.size,
+    }
+    write_json(out / "run.json", record, comm)
+
+
+def _run_coupled(
+    scene: Scene,
+    solid: CDEMSolid,
+    out: Path,
+    say: Callable[[str], None],
+    record: Callable[[], dict[str, Any]],
+    resume: bool,
+    observers: Sequence[StepObserver],
+) -> dict[str, Any]:
+    """Inject into the solid of an [injection] scene and write its results."""
+    phys, comm = scene.physics, solid.comm
     frac = build_fracture(scene, solid)
-    fingerprint = mesh_fingerprint(tmesh)
+    fingerprint = mesh_fingerprint(solid.tmesh)
     first = FirstCrack(lambda f: _first_crack(scene, f))
     if resume:
         _resume(frac, out, fingerprint, first, say, comm)
@@ -263,10 +280,30 @@ def run_scene(
     times = [0.0] + [r.time for r in frac.history]
     pressures = [phys.initial_pressure] + [r.injection_pressure for r in frac.history]
     found = detect_breakdown(times, pressures)
-    counts = solid.broken_counts()
     points, data = frac.facet_fields()
     write_interfaces(out / "fracture.vtu", points, data, comm)
-    summary = {
+    summary = _summarise(scene, frac, found, pressures, first, stopped) | record()
+    write_json(out / "summary.json", summary, comm)
+    if comm.rank == 0 and pressures:
+        _plot_pressure(out / "pressure.png", times, pressures, found, scene.name)
+    if phys.pictures:
+        _picture_fracture(out / "fracture.png", scene, frac)
+    comm.barrier()
+    return summary
+
+
+def _summarise(
+    scene: Scene,
+    frac: HydraulicFracture,
+    found: Any,
+    pressures: list[float],
+    first: FirstCrack,
+    stopped: str | None,
+) -> dict[str, Any]:
+    """Collect the answers of a coupled run for ``summary.json``."""
+    solid = frac.solid
+    counts = solid.broken_counts()
+    return {
         "scene": scene.name,
         "breakdown_pressure_MPa": found.pressure / 1e6 if found else None,
         "breakdown_time_s": found.time if found else None,
@@ -284,15 +321,7 @@ def run_scene(
         "rebuild_seconds": frac.rebuild_seconds,
         "max_mass_error": max((r.mass_error for r in frac.history), default=0.0),
         "stopped": stopped,
-        **record(),
     }
-    write_json(out / "summary.json", summary, comm)
-    if comm.rank == 0 and pressures:
-        _plot_pressure(out / "pressure.png", times, pressures, found, scene.name)
-    if phys.pictures:
-        _picture_fracture(out / "fracture.png", scene, frac)
-    comm.barrier()
-    return summary
 
 
 def _resume(
