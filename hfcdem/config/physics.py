@@ -3,7 +3,7 @@
 Every dimensional value carries its unit (``"21.5 GPa"``, ``"1e-7 m3/s"``);
 fields left out take the defaults below, and :attr:`Physics.defaulted` lists
 them so a run's record can print what was assumed.  Any invalid field raises
-:class:`~hfcdem.config.scene.SceneError` naming it, before anything is meshed.
+:class:`~hfcdem.config.tables.SceneError` naming it, before anything is meshed.
 
 .. code-block:: toml
 
@@ -67,6 +67,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from hfcdem.config.tables import SceneError, TomlTable
+from hfcdem.config.units import parse_quantity
 from hfcdem.flow.fluid import Fluid, Injection
 from hfcdem.solid.elastic import ElasticMaterial, InSituStress
 from hfcdem.solid.interfaces import InterfaceModel
@@ -140,8 +142,6 @@ class Physics:
 
 def parse_physics(data: Mapping[str, Any]) -> Physics:
     """Read the physics sections of a parsed scene document (see the module docstring)."""
-    from hfcdem.config.scene import SceneError, TomlTable
-
     defaulted: list[str] = []
 
     def section(name: str) -> Any:
@@ -229,8 +229,6 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
         else:
             points = inj.raw(given[0])
             dim = "flow_rate" if given[0] == "rate_schedule" else "stress"
-            from hfcdem.config.units import parse_quantity
-
             check(
                 isinstance(points, list) and len(points) > 0, inj.sub(given[0]), "expected a list"
             )
