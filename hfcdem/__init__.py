@@ -26,8 +26,8 @@ _API = {
     # config: scene files become validated dataclasses
     "load_scene": "hfcdem.config.scene",
     "parse_scene": "hfcdem.config.scene",
-    "Scene": "hfcdem.config.scene",
-    "SceneError": "hfcdem.config.scene",
+    "Scene": "hfcdem.config.geometry",
+    "SceneError": "hfcdem.config.tables",
     "FieldError": "hfcdem.config.units",
     "Physics": "hfcdem.config.physics",
     # mesh: a scene becomes a tagged DOLFINx mesh

@@ -42,7 +42,8 @@ def _scene_files(args: argparse.Namespace) -> list[Path]:
 def _mesh(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
-    from hfcdem.config.scene import SceneError, load_scene
+    from hfcdem.config.scene import load_scene
+    from hfcdem.config.tables import SceneError
     from hfcdem.config.units import FieldError, parse_quantity
     from hfcdem.mesh.build import mesh_scene
     from hfcdem.mesh.tagged import MeshingError
@@ -90,7 +91,7 @@ def _overrides(items: list[str] | None) -> dict[str, object]:
     """Parse ``KEY=VALUE`` pairs; VALUE is a TOML value, or else taken as a string."""
     import tomllib
 
-    from hfcdem.config.scene import SceneError
+    from hfcdem.config.tables import SceneError
 
     out: dict[str, object] = {}
     for item in items or []:

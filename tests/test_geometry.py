@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from hfcdem.config.scene import Profile, load_scene, parse_scene, tunnel_extension
+from hfcdem.config.parts import Profile, tunnel_extension
+from hfcdem.config.scene import load_scene, parse_scene
 from hfcdem.mesh import block as geometry
 from hfcdem.mesh.build import create_scene_mesh, measure_mesh
 from hfcdem.mesh.tagged import MeshingError

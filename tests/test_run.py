@@ -7,7 +7,8 @@ from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
 from hfcdem.cli import main
-from hfcdem.config.scene import SceneError, load_scene, parse_scene
+from hfcdem.config.scene import load_scene, parse_scene
+from hfcdem.config.tables import SceneError
 from hfcdem.io.series import read_pvd
 from hfcdem.workflows.observers import StepObserver
 from hfcdem.workflows.run import OutputInUse, pressurised_groups, run_scene

@@ -8,20 +8,10 @@ import numpy as np
 import pytest
 
 from hfcdem.config import catalogue
-from hfcdem.config.scene import (
-    BoreholeSquare,
-    CrackPlate,
-    KGDStrip,
-    MeshSizing,
-    PerforatedBlock,
-    Profile,
-    SceneError,
-    TunnelZone,
-    load_scene,
-    parse_geometry,
-    parse_scene,
-    tunnel_extension,
-)
+from hfcdem.config.geometry import BoreholeSquare, CrackPlate, KGDStrip, PerforatedBlock
+from hfcdem.config.parts import MeshSizing, Profile, TunnelZone, tunnel_extension
+from hfcdem.config.scene import load_scene, parse_geometry, parse_scene
+from hfcdem.config.tables import SceneError
 
 SCENES = Path(__file__).resolve().parents[1] / "meshes" / "scenes"
 SCENE_FILES = sorted(SCENES.glob("*.toml"))

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from hfcdem.config.scene import PerforatedBlock, load_scene
+from hfcdem.config.geometry import PerforatedBlock
+from hfcdem.config.scene import load_scene
 from hfcdem.mesh import block as geometry
 from hfcdem.mesh import plates
 from hfcdem.mesh.build import create_scene_mesh, measure_mesh, mesh_report

@@ -4,7 +4,8 @@ import math
 
 import pytest
 
-from hfcdem.config.scene import SceneError, parse_scene
+from hfcdem.config.scene import parse_scene
+from hfcdem.config.tables import SceneError
 
 GEOMETRY = {"catalogue": "borehole_plate"}
 PHYSICS = {

@@ -7,7 +7,8 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem.cli import main
-from hfcdem.config.scene import SceneError, load_scene
+from hfcdem.config.scene import load_scene
+from hfcdem.config.tables import SceneError
 from hfcdem.workflows.run import run_scene
 
 SNEDDON = "meshes/scenes/sneddon_plate.toml"

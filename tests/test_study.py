@@ -4,8 +4,8 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem.cli import main
-from hfcdem.config.scene import SceneError
 from hfcdem.config.scene import set_field as _set
+from hfcdem.config.tables import SceneError
 from hfcdem.workflows.study import case_directory, load_study, numeric, run_study
 
 SCENE = "../meshes/scenes/kgd_strip.toml"

@@ -3,7 +3,7 @@
 Every dimensional value carries its unit (``"21.5 GPa"``, ``"1e-7 m3/s"``);
 fields left out take the defaults below, and :attr:`Physics.defaulted` lists
 them so a run's record can print what was assumed.  Any invalid field raises
-:class:`~hfcdem.config.scene.SceneError` naming it, before anything is meshed.
+:class:`~hfcdem.config.tables.SceneError` naming it, before anything is meshed.
 
 .. code-block:: toml
 
@@ -67,7 +67,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from hfcdem.config.scene import SceneError, TomlTable
+from hfcdem.config.tables import SceneError, TomlTable
+from hfcdem.config.units import parse_quantity
 from hfcdem.flow.fluid import Fluid, Injection
 from hfcdem.solid.elastic import ElasticMaterial, InSituStress
 from hfcdem.solid.interfaces import InterfaceModel
@@ -253,8 +254,6 @@ def _read_fluid(r: _Reader) -> Fluid:
 
 def _read_schedule(inj: TomlTable) -> Injection:
     """Exactly one of ``rate``, ``rate_schedule`` (time, rate) or ``pressure_schedule``."""
-    from hfcdem.config.units import parse_quantity
-
     given = [k for k in ("rate", "rate_schedule", "pressure_schedule") if inj.has(k)]
     _check(
         len(given) == 1,

@@ -3,7 +3,7 @@
 Each tunnel is lofted (OCC ``addThruSections``, ruled) through circles at its
 stations, so it is a stack of conical frustums.  It starts a little inside the
 wellbore, on the backward extension of its first segment
-(:func:`hfcdem.config.scene.tunnel_extension`), so the boolean cut is robust; the
+(:func:`hfcdem.config.parts.tunnel_extension`), so the boolean cut is robust; the
 part of the tunnel outside the wellbore is then the frustum stack plus a thin
 *sliver* between the curved wellbore wall and the plane of station 0.  The
 analytic references here (:func:`expected_measures`) include the sliver and
@@ -38,9 +38,9 @@ from typing import Any
 import gmsh
 import numpy as np
 
-from hfcdem.config.scene import (
+from hfcdem.config.geometry import PerforatedBlock
+from hfcdem.config.parts import (
     AXES,
-    PerforatedBlock,
     Profile,
     SlabZone,
     SphereZone,

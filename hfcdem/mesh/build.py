@@ -28,7 +28,7 @@ from dolfinx.io import XDMFFile
 from mpi4py import MPI
 
 from hfcdem.config import catalogue
-from hfcdem.config.scene import PerforatedBlock, Scene
+from hfcdem.config.geometry import PerforatedBlock, Scene
 from hfcdem.io.files import prepare_output_dir, write_json
 from hfcdem.mesh import block as geometry
 from hfcdem.mesh import plates

@@ -13,7 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from hfcdem.config.scene import PerforatedBlock, Scene, axis_vector
+from hfcdem.config.geometry import PerforatedBlock, Scene
+from hfcdem.config.parts import axis_vector
 from hfcdem.io.plots import ensure_display
 
 _WALL_PREFIXES = ("wellbore_wall", "perforation_")

@@ -1,15 +1,15 @@
 """Gmsh models of 2D plates (plane strain, x-y plane) for the verification scenes.
 
-* :class:`~hfcdem.config.scene.CrackPlate`: a plate with a central pre-existing crack
+* :class:`~hfcdem.config.geometry.CrackPlate`: a plate with a central pre-existing crack
   along x (seed cdem-perforation-breakdown Table 1: 1 m square, 0.2 m crack).
   The crack is an internal line of the mesh: the triangles on its two sides
   share its facets (nothing is duplicated); the CDEM solid treats them as a
   pre-existing crack through interior-facet integrals ``dS(crack)``.
-* :class:`~hfcdem.config.scene.KGDStrip`: a plate with an initial crack (``crack``)
+* :class:`~hfcdem.config.geometry.KGDStrip`: a plate with an initial crack (``crack``)
   and, beyond it, the line the fracture is expected to follow
   (``fracture_path``), both internal lines; the injection point, the origin,
   is a mesh vertex.
-* :class:`~hfcdem.config.scene.BoreholeSquare`: a square with a borehole at its
+* :class:`~hfcdem.config.geometry.BoreholeSquare`: a square with a borehole at its
   centre (seed pfc2d sec. 3.2: 1000 mm square, 60 mm borehole).
 
 Tag names (the API):
@@ -35,7 +35,8 @@ from typing import Any
 import gmsh
 import numpy as np
 
-from hfcdem.config.scene import BoreholeSquare, CrackPlate, KGDStrip, SlabZone, SphereZone
+from hfcdem.config.geometry import BoreholeSquare, CrackPlate, KGDStrip
+from hfcdem.config.parts import SlabZone, SphereZone
 from hfcdem.mesh.block import element_quality, plane_residual
 
 Plate2D = CrackPlate | KGDStrip | BoreholeSquare

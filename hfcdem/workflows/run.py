@@ -32,7 +32,8 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
-from hfcdem.config.scene import Scene, SceneError
+from hfcdem.config.geometry import Scene
+from hfcdem.config.tables import SceneError
 from hfcdem.coupling.hydrofrac import (
     FlowSettings,
     HydraulicFracture,

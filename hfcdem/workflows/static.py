@@ -30,7 +30,8 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.config.scene import CrackPlate, Scene, SceneError
+from hfcdem.config.geometry import CrackPlate, Scene
+from hfcdem.config.tables import SceneError
 from hfcdem.io.files import write_csv, write_json
 from hfcdem.io.sampling import evaluate_at_points
 from hfcdem.io.series import FieldSeries

@@ -36,8 +36,10 @@ from typing import Any
 
 from mpi4py import MPI
 
-from hfcdem.config.scene import Scene, SceneError, parse_scene
+from hfcdem.config.geometry import Scene
+from hfcdem.config.scene import parse_scene
 from hfcdem.config.scene import set_field as _set
+from hfcdem.config.tables import SceneError
 from hfcdem.config.units import UNITS, FieldError, parse_quantity
 from hfcdem.io.files import prepare_output_dir
 
