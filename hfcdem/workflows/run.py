@@ -43,6 +43,7 @@ from hfcdem.coupling.hydrofrac import (
 from hfcdem.info import versions
 from hfcdem.io.files import prepare_output_dir, to_builtin, write_interfaces, write_json
 from hfcdem.io.history import HistoryFile
+from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import FieldSeries
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.workflows.breakdown import detect_breakdown
@@ -471,29 +472,12 @@ def _jsonable(value: Any) -> Any:
 
 
 def _plot_pressure(path: Path, times: list[float], pressures: list[float], found: Any, name: str):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4.5))
-    ax.plot(times, [p / 1e6 for p in pressures], "-", label="injection pressure")
+    """Draw the injection pressure with the breakdown marked (called on rank 0)."""
+    curves = [(np.asarray(times), np.asarray(pressures) / 1e6, "injection pressure", "-")]
     if found is not None:
-        ax.plot(
-            [found.time],
-            [found.pressure / 1e6],
-            "rv",
-            ms=9,
-            label=f"breakdown {found.pressure / 1e6:.2f} MPa",
-        )
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("pressure (MPa)")
-    ax.set_title(name)
-    ax.grid(alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+        label = f"breakdown {found.pressure / 1e6:.2f} MPa"
+        curves.append((np.array([found.time]), np.array([found.pressure / 1e6]), label, "rv"))
+    plot_lines(path, curves, "time (s)", "pressure (MPa)", name, MPI.COMM_SELF)
 
 
 __all__ = [

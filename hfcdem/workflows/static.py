@@ -33,6 +33,7 @@ from hfcdem import analytic
 from hfcdem.config.geometry import CrackPlate, Scene
 from hfcdem.config.tables import SceneError
 from hfcdem.io.files import write_csv, write_json
+from hfcdem.io.plots import plot_lines
 from hfcdem.io.sampling import evaluate_at_points
 from hfcdem.io.series import FieldSeries
 from hfcdem.solid.cdem import CDEMSolid, Loads
@@ -186,12 +187,8 @@ def run_static(
 def _plot_opening(
     path: Path, profile: np.ndarray, reference: dict[str, Any] | None, scene: Scene
 ) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.5, 4))
+    """Draw the crack-face displacement against Sneddon's (called on rank 0)."""
+    curves = []
     if reference is not None and isinstance(scene.geometry, CrackPlate):
         a = 0.5 * scene.geometry.crack.length
         fine = np.linspace(-a, a, 201)
@@ -199,21 +196,16 @@ def _plot_opening(
         exact = 0.5 * analytic.sneddon_opening(
             fine, a, scene.physics.load.crack_pressure, rock.youngs_modulus, rock.poisson_ratio
         )
-        ax.plot(fine, exact * 1e6, "k-", label="Sneddon, eq. (21)")
         pts = np.asarray(reference["points"])
-        ax.plot(pts[:, 0], pts[:, 1] * 1e6, "o", label="hfcdem, monitoring points")
+        curves += [
+            (fine, exact * 1e6, "Sneddon, eq. (21)", "k-"),
+            (pts[:, 0], pts[:, 1] * 1e6, "hfcdem, monitoring points", "o"),
+        ]
     if len(profile):
-        ax.plot(
-            profile[:, 0], 0.5 * profile[:, 1] * 1e6, ".", ms=3, label="hfcdem, facet midpoints"
-        )
-    ax.set_xlabel("x along the crack (m)")
-    ax.set_ylabel("crack-face displacement u_y = w / 2 (um)")
-    ax.set_title(f"{scene.name}: crack pressure {scene.physics.load.crack_pressure / 1e6:g} MPa")
-    ax.grid(alpha=0.3)
-    ax.legend()
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+        curves.append((profile[:, 0], 0.5 * profile[:, 1] * 1e6, "hfcdem, facet midpoints", "."))
+    title = f"{scene.name}: crack pressure {scene.physics.load.crack_pressure / 1e6:g} MPa"
+    ylabel = "crack-face displacement u_y = w / 2 (um)"
+    plot_lines(path, curves, "x along the crack (m)", ylabel, title, MPI.COMM_SELF)
 
 
 __all__ = [
