@@ -140,7 +140,8 @@ run_in() {
     local uid gid
     uid=$(stat -c %u "$top"); gid=$(stat -c %g "$top")
     local envs=(-e PYTHONPATH=/src -e XDG_CACHE_HOME=/src/.cache -e HOME=/tmp
-                -e "CI=${CI:-}" -e "HFCDEM_RANKS=${HFCDEM_RANKS:-2}")
+                -e "CI=${CI:-}" -e "HFCDEM_RANKS=${HFCDEM_RANKS:-2}"
+                -e "HFCDEM_PASS_LIMIT=${HFCDEM_PASS_LIMIT:-1800}")
     if [ "$engine" = docker ]; then
         local tty=()
         [ "$interactive" = 1 ] && tty=(-it)

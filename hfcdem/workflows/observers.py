@@ -146,9 +146,12 @@ def mesh_fingerprint(tmesh: Any) -> str:
     tdim = mesh.topology.dim
     owned = mesh.geometry.index_map().size_local
     x = mesh.geometry.x[:owned]
-    lo = comm.allreduce(x.min(axis=0) if len(x) else np.full(3, np.inf), op=MPI.MIN)
-    hi = comm.allreduce(x.max(axis=0) if len(x) else np.full(3, -np.inf), op=MPI.MAX)
-    total = comm.allreduce(x.sum(axis=0), op=MPI.SUM)
+    gdim = x.shape[1]
+    lo, hi, total = np.empty(gdim), np.empty(gdim), np.empty(gdim)
+    # buffer reductions: element-wise over the coordinates
+    comm.Allreduce(x.min(axis=0) if len(x) else np.full(gdim, np.inf), lo, op=MPI.MIN)
+    comm.Allreduce(x.max(axis=0) if len(x) else np.full(gdim, -np.inf), hi, op=MPI.MAX)
+    comm.Allreduce(x.sum(axis=0), total, op=MPI.SUM)
     vertices = mesh.geometry.index_map().size_global
     # the mean position in units of the extent, to 9 decimals: the order of the parallel
     # sum (1e-16 relative) does not reach them; + 0.0 turns -0.0 into 0.0
