@@ -49,6 +49,7 @@ from hfcdem.config.parts import (
     axis_vector,
     tunnel_extension,
 )
+from hfcdem.mesh.grading import add_grading, use_gradings
 
 
 @dataclass(frozen=True)
@@ -448,21 +449,19 @@ def classify_faces(
 
 
 def _threshold(model: Any, faces: list[int], start: float, geom: PerforatedBlock) -> int:
-    field = model.mesh.field
-    dist = field.add("Distance")
-    field.setNumbers(dist, "SurfacesList", faces)
     extent = max(
         float(np.max(np.subtract(model.getBoundingBox(2, f)[3:], model.getBoundingBox(2, f)[:3])))
         for f in faces
     )
-    field.setNumber(dist, "Sampling", int(np.clip(np.ceil(2.0 * extent / start), 20, 200)))
-    thr = field.add("Threshold")
-    field.setNumber(thr, "InField", dist)
-    field.setNumber(thr, "SizeMin", start)
-    field.setNumber(thr, "SizeMax", geom.mesh.size_far)
-    field.setNumber(thr, "DistMin", 0.0)
-    field.setNumber(thr, "DistMax", max(geom.mesh.growth_distance(start), 1e-9))
-    return int(thr)
+    return add_grading(
+        model,
+        2,
+        faces,
+        start,
+        geom.mesh.size_far,
+        max(geom.mesh.growth_distance(start), 1e-9),
+        int(np.clip(np.ceil(2.0 * extent / start), 20, 200)),
+    )
 
 
 def _set_sizes(model: Any, geom: PerforatedBlock, groups: dict[str, list[tuple[int, int]]]) -> None:
@@ -484,15 +483,7 @@ def _set_sizes(model: Any, geom: PerforatedBlock, groups: dict[str, list[tuple[i
         elif name == "wellbore_wall":
             faces = [f for f, _ in entries]
             thresholds.append(_threshold(model, faces, geom.wellbore_size, geom))
-    field = model.mesh.field
-    smallest = field.add("Min")
-    field.setNumbers(smallest, "FieldsList", thresholds)
-    field.setAsBackgroundMesh(smallest)
-    for opt in ("MeshSizeFromPoints", "MeshSizeFromCurvature", "MeshSizeExtendFromBoundary"):
-        gmsh.option.setNumber(f"Mesh.{opt}", 0)
-    # 1D meshing integrates 1/size along curves; the default 1e-9 costs seconds per scene
-    gmsh.option.setNumber("Mesh.LcIntegrationPrecision", 1e-4)
-    gmsh.option.setNumber("Mesh.MeshSizeMax", geom.mesh.size_far)
+    use_gradings(model, thresholds, geom.mesh.size_far)
     gmsh.option.setNumber("Mesh.Algorithm3D", geom.mesh.ALGORITHMS[geom.mesh.algorithm])
 
 

@@ -38,6 +38,7 @@ import numpy as np
 from hfcdem.config.geometry import BoreholeSquare, CrackPlate, KGDStrip
 from hfcdem.config.parts import SlabZone, SphereZone
 from hfcdem.mesh.block import element_quality, plane_residual
+from hfcdem.mesh.grading import add_grading, use_gradings
 
 Plate2D = CrackPlate | KGDStrip | BoreholeSquare
 Residual = Callable[[np.ndarray], np.ndarray]
@@ -188,23 +189,11 @@ def build_plate(geom: Plate2D, model: Any) -> dict[str, Any]:
 
     refined = [c for n in ("crack", "fracture_path", "wellbore_wall") for c in groups.get(n, [])]
     start = geom.wall_size if isinstance(geom, BoreholeSquare) else geom.mesh.size
-    field = model.mesh.field
-    dist = field.add("Distance")
-    field.setNumbers(dist, "CurvesList", refined)
     span = float(max(hi - lo))
-    field.setNumber(dist, "Sampling", int(np.clip(np.ceil(2.0 * span / start), 50, 2000)))
-    thr = field.add("Threshold")
-    field.setNumber(thr, "InField", dist)
-    field.setNumber(thr, "SizeMin", start)
-    field.setNumber(thr, "SizeMax", geom.mesh.size_far)
-    field.setNumber(thr, "DistMin", 0.0)
-    field.setNumber(thr, "DistMax", max(geom.mesh.growth_distance(start), 1e-9))
-    field.setAsBackgroundMesh(thr)
-    for opt in ("MeshSizeFromPoints", "MeshSizeFromCurvature", "MeshSizeExtendFromBoundary"):
-        gmsh.option.setNumber(f"Mesh.{opt}", 0)
-    # 1D meshing integrates 1/size along curves; the default 1e-9 costs seconds per scene
-    gmsh.option.setNumber("Mesh.LcIntegrationPrecision", 1e-4)
-    gmsh.option.setNumber("Mesh.MeshSizeMax", geom.mesh.size_far)
+    sampling = int(np.clip(np.ceil(2.0 * span / start), 50, 2000))
+    dist_max = max(geom.mesh.growth_distance(start), 1e-9)
+    grading = add_grading(model, 1, refined, start, geom.mesh.size_far, dist_max, sampling)
+    use_gradings(model, [grading], geom.mesh.size_far)
     model.mesh.generate(2)
     return {
         "quality": element_quality(model, 2),
