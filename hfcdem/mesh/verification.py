@@ -60,10 +60,7 @@ class BoreholePlate:
             raise ValueError(f"ring_layers must be in [0, 200], got {self.ring_layers!r}")
         if self.radius + self.ring_layers * self.size_at_wall >= self.half_width:
             raise ValueError("the structured ring around the wall must fit inside the plate")
-        if not 0.01 <= self.growth <= 2.0:
-            raise ValueError(
-                f"growth must be in [0.01, 2] (size per distance), got {self.growth!r}"
-            )
+        _check_growth(self.growth)
 
     def _ring_sectors(self, occ: Any, b: float) -> list[int]:
         """Quarter-annulus surfaces between the wall and radius ``b``."""
@@ -118,7 +115,6 @@ class BoreholePlate:
             else:
                 key = "outer"
             groups.setdefault(key, []).append(curve)
-        _add_groups(model, 1, groups)
 
         if self.ring_layers:
             # structured layers: arcs divided evenly, radial lines into ring_layers
@@ -136,11 +132,10 @@ class BoreholePlate:
                 x0, y0, _, x1, y1, _ = model.getBoundingBox(2, surf)
                 if max(abs(x0), abs(x1), abs(y0), abs(y1)) <= b + tol:
                     model.mesh.setTransfiniteSurface(surf)
-        reach = (self.size_far - self.size_at_wall) / self.growth
-        _grade_from(
-            model, 1, groups["wellbore_wall"], self.size_at_wall, self.size_far, b - a + reach
+        wall = groups["wellbore_wall"]
+        _grade_and_mesh(
+            model, 1, groups, wall, self.size_at_wall, self.size_far, self.growth, flat=b - a
         )
-        model.mesh.generate(2)
 
 
 def create_borehole_plate(plate: BoreholePlate, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
@@ -162,11 +157,31 @@ def _check_lengths(obj: Any, *keys: str) -> None:
             raise ValueError(f"{key} must be a positive length in m, got {value!r}")
 
 
-def _grade_from(
-    model: Any, dim: int, tags: list[int], size_min: float, size_max: float, dist_max: float
+def _grade_and_mesh(
+    model: Any,
+    dim: int,
+    groups: Mapping[str, list[int]],
+    refined: list[int],
+    size_min: float,
+    size_max: float,
+    growth: float,
+    flat: float = 0.0,
 ) -> None:
-    """Element size growing linearly from ``size_min`` at the entities to ``size_max``."""
-    use_gradings(model, [add_grading(model, dim, tags, size_min, size_max, dist_max, 400)])
+    """Name the boundary ``groups``, grade the size from ``refined`` and mesh the model.
+
+    The size is ``size_min`` within ``flat`` of the refined entities and grows at
+    ``growth`` per metre beyond, up to ``size_max``.
+    """
+    _add_groups(model, dim, groups)
+    reach = (size_max - size_min) / growth
+    grading = add_grading(model, dim, refined, size_min, size_max, flat + reach, 400)
+    use_gradings(model, [grading])
+    model.mesh.generate(dim + 1)
+
+
+def _check_growth(growth: float) -> None:
+    if not 0.01 <= growth <= 2.0:
+        raise ValueError(f"growth must be in [0.01, 2] (size per distance), got {growth!r}")
 
 
 @dataclass(frozen=True)
@@ -195,10 +210,7 @@ class CrackPlate:
             raise ValueError("size_at_crack must resolve the crack: at most half_length / 2")
         if self.size_far < self.size_at_crack:
             raise ValueError("size_far must be at least size_at_crack")
-        if not 0.01 <= self.growth <= 2.0:
-            raise ValueError(
-                f"growth must be in [0.01, 2] (size per distance), got {self.growth!r}"
-            )
+        _check_growth(self.growth)
 
     def build(self, model: Any) -> None:
         """Create the Gmsh geometry, groups and mesh of the plate."""
@@ -224,10 +236,9 @@ class CrackPlate:
             else:
                 key = "outer"
             groups.setdefault(key, []).append(curve)
-        _add_groups(model, 1, groups)
-        reach = (self.size_far - self.size_at_crack) / self.growth
-        _grade_from(model, 1, groups["crack"], self.size_at_crack, self.size_far, reach)
-        model.mesh.generate(2)
+        _grade_and_mesh(
+            model, 1, groups, groups["crack"], self.size_at_crack, self.size_far, self.growth
+        )
 
 
 def create_crack_plate(plate: CrackPlate, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
@@ -271,10 +282,7 @@ class PathPlate:
             raise ValueError(f"crack_facets must be in [1, {round(segments) - 1}]")
         if self.size_far < self.size_on_path:
             raise ValueError("size_far must be at least size_on_path")
-        if not 0.01 <= self.growth <= 2.0:
-            raise ValueError(
-                f"growth must be in [0.01, 2] (size per distance), got {self.growth!r}"
-            )
+        _check_growth(self.growth)
 
     def build(self, model: Any) -> None:
         """Create the Gmsh geometry, groups and mesh of the plate."""
@@ -302,10 +310,7 @@ class PathPlate:
             else:
                 key = "outer"
             groups.setdefault(key, []).append(curve)
-        _add_groups(model, 1, groups)
-        reach = (self.size_far - h) / self.growth
-        _grade_from(model, 1, path_curves, h, self.size_far, reach)
-        model.mesh.generate(2)
+        _grade_and_mesh(model, 1, groups, path_curves, h, self.size_far, self.growth)
 
 
 def create_path_plate(plate: PathPlate, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
@@ -361,10 +366,9 @@ class PennyBlock:
             else:
                 key = "outer"
             groups.setdefault(key, []).append(surf)
-        _add_groups(model, 2, groups)
-        reach = (self.size_far - self.size_at_crack) / self.growth
-        _grade_from(model, 2, groups["crack"], self.size_at_crack, self.size_far, reach)
-        model.mesh.generate(3)
+        _grade_and_mesh(
+            model, 2, groups, groups["crack"], self.size_at_crack, self.size_far, self.growth
+        )
 
 
 def create_penny_block(block: PennyBlock, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
