@@ -26,7 +26,7 @@ from mpi4py import MPI
 
 from hfcdem import analytic
 from hfcdem.io.sampling import evaluate_at_points
-from hfcdem.mesh.tagged import (
+from hfcdem.mesh.verification import (
     BoreholePlate,
     CrackPlate,
     PennyBlock,

@@ -24,7 +24,7 @@ from mpi4py import MPI
 from hfcdem.analytic import kgd_viscosity
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
 from hfcdem.flow.fluid import Fluid, Injection
-from hfcdem.mesh.tagged import PathPlate, create_path_plate
+from hfcdem.mesh.verification import PathPlate, create_path_plate
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.elastic import ElasticMaterial, InSituStress
 from hfcdem.solid.interfaces import InterfaceModel

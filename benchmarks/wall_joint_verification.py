@@ -18,7 +18,7 @@ from mpi4py import MPI
 
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
 from hfcdem.flow.fluid import Fluid, Injection
-from hfcdem.mesh.tagged import BoreholePlate, create_borehole_plate
+from hfcdem.mesh.verification import BoreholePlate, create_borehole_plate
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.elastic import ElasticMaterial, InSituStress
 from hfcdem.solid.interfaces import InterfaceModel

@@ -33,7 +33,7 @@ from hfcdem.info import versions
 from hfcdem.io.files import prepare_output_dir, write_csv, write_fields, write_json
 from hfcdem.io.plots import plot_lines, render_field
 from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
-from hfcdem.mesh.tagged import BoreholePlate, create_borehole_plate
+from hfcdem.mesh.verification import BoreholePlate, create_borehole_plate
 from hfcdem.solid.elastic import ElasticMaterial, InSituStress, solve_cavity_pressure
 
 MPa = 1e6

@@ -32,7 +32,7 @@ from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
 from hfcdem.flow.fluid import Fluid, Injection
 from hfcdem.info import versions
 from hfcdem.io.files import prepare_output_dir, write_interfaces, write_json
-from hfcdem.mesh.tagged import PathPlate, create_path_plate
+from hfcdem.mesh.verification import PathPlate, create_path_plate
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.elastic import ElasticMaterial, InSituStress
 from hfcdem.solid.interfaces import InterfaceModel

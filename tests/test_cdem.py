@@ -11,7 +11,7 @@ from mpi4py import MPI
 
 from hfcdem import analytic
 from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
-from hfcdem.mesh.tagged import (
+from hfcdem.mesh.verification import (
     BoreholePlate,
     CrackPlate,
     PennyBlock,

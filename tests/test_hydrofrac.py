@@ -13,7 +13,12 @@ from mpi4py import MPI
 from hfcdem.analytic import kgd_viscosity
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
 from hfcdem.flow.fluid import CarterLeakOff, Fluid, Injection
-from hfcdem.mesh.tagged import BoreholePlate, PathPlate, create_borehole_plate, create_path_plate
+from hfcdem.mesh.verification import (
+    BoreholePlate,
+    PathPlate,
+    create_borehole_plate,
+    create_path_plate,
+)
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.elastic import ElasticMaterial, InSituStress
 from hfcdem.solid.interfaces import InterfaceModel

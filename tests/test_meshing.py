@@ -6,7 +6,8 @@ import pytest
 import ufl
 from mpi4py import MPI
 
-from hfcdem.mesh.tagged import BoreholePlate, MeshingError, create_borehole_plate, mesh_from_gmsh
+from hfcdem.mesh.tagged import MeshingError, mesh_from_gmsh
+from hfcdem.mesh.verification import BoreholePlate, create_borehole_plate
 
 
 def _measure(tmesh, name=None):

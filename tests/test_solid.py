@@ -6,7 +6,7 @@ from mpi4py import MPI
 
 from hfcdem import analytic
 from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
-from hfcdem.mesh.tagged import BoreholePlate, create_borehole_plate
+from hfcdem.mesh.verification import BoreholePlate, create_borehole_plate
 from hfcdem.solid.elastic import ElasticMaterial, InSituStress, solve_cavity_pressure
 
 MPa = 1e6

@@ -283,12 +283,15 @@ class PerforatedBlock:
         middle = 0.5 * (perf.start(self.wellbore) + perf.tip(self.wellbore))
         return "kept" if middle[axis_index(axis)] > 0.0 else "dropped"
 
-    def kept_fraction(self, k: int) -> float:
-        """Share of perforation ``k`` (from 0) in the model: 1, 1/2, 1/4, or 0 if dropped."""
+    def kept_fraction(self, k: int, skip: str | None = None) -> float:
+        """Share of perforation ``k`` (from 0) in the model: 1, 1/2, 1/4, or 0 if dropped.
+
+        ``skip`` leaves out one mirror plane (the share seen on that plane).
+        """
         fraction = 1.0
         for axis in self.symmetry:
-            rel = self.relation(k, axis)
-            fraction *= {"cut": 0.5, "kept": 1.0, "dropped": 0.0}[rel]
+            if axis != skip:
+                fraction *= {"cut": 0.5, "kept": 1.0, "dropped": 0.0}[self.relation(k, axis)]
         return fraction
 
     @property
@@ -391,8 +394,19 @@ def _plate_symmetric_axes(
     return tuple(a for a in allowed if zone.mirror_problem(a) is None)
 
 
-def _plate_fraction(symmetry: tuple[str, ...]) -> float:
-    return 0.5 ** len(symmetry)
+def _estimate_plate_cells(geom: Any, start: float, line: float = 0.0, radius: float = 0.0) -> float:
+    """Rough triangle count of a plate refined to ``start`` around a line or a hole.
+
+    The refined wall is a straight line of ``line`` length or a circle of
+    ``radius``; the curve at distance rho from it is 2 line + 2 pi (radius + rho) long.
+    """
+    frac = 0.5 ** len(geom.symmetry)
+
+    def around(rho: np.ndarray) -> np.ndarray:
+        return frac * (2.0 * line + 2.0 * np.pi * (radius + rho))
+
+    area = geom.plate.width * geom.plate.height * frac
+    return _estimate_cells(geom.mesh, area, [(start, around)], 2)
 
 
 @dataclass(frozen=True)
@@ -422,14 +436,7 @@ class CrackPlate:
 
     def estimated_cells(self) -> float:
         """Rough number of triangles."""
-        frac = _plate_fraction(self.symmetry)
-        a = self.crack.length
-
-        def around(rho: np.ndarray) -> np.ndarray:
-            return frac * (2.0 * a + 2.0 * np.pi * rho)
-
-        area = self.plate.width * self.plate.height * frac
-        return _estimate_cells(self.mesh, area, [(self.mesh.size, around)], 2)
+        return _estimate_plate_cells(self, self.mesh.size, line=self.crack.length)
 
 
 @dataclass(frozen=True)
@@ -464,14 +471,8 @@ class KGDStrip:
 
     def estimated_cells(self) -> float:
         """Rough number of triangles."""
-        frac = _plate_fraction(self.symmetry)
         path = self.crack.path_length or self.crack.length
-
-        def around(rho: np.ndarray) -> np.ndarray:
-            return frac * (2.0 * path + 2.0 * np.pi * rho)
-
-        area = self.plate.width * self.plate.height * frac
-        return _estimate_cells(self.mesh, area, [(self.mesh.size, around)], 2)
+        return _estimate_plate_cells(self, self.mesh.size, line=path)
 
 
 @dataclass(frozen=True)
@@ -509,14 +510,7 @@ class BoreholeSquare:
 
     def estimated_cells(self) -> float:
         """Rough number of triangles."""
-        frac = _plate_fraction(self.symmetry)
-        big_r = self.wellbore.radius
-
-        def around(rho: np.ndarray) -> np.ndarray:
-            return frac * 2.0 * np.pi * (big_r + rho)
-
-        area = self.plate.width * self.plate.height * frac
-        return _estimate_cells(self.mesh, area, [(self.wall_size, around)], 2)
+        return _estimate_plate_cells(self, self.wall_size, radius=self.wellbore.radius)
 
 
 Geometry = PerforatedBlock | CrackPlate | KGDStrip | BoreholeSquare

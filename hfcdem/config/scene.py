@@ -340,6 +340,17 @@ def parse_geometry(
     return geom, name, chosen
 
 
+def _read_wellbore(top: TomlTable, axis: str | None = None) -> Wellbore:
+    """Read ``[wellbore]``; a 2D borehole has its ``axis`` fixed (the table may not set it)."""
+    wt = top.table("wellbore")
+    if wt is None:
+        raise SceneError(top.sub("wellbore"), "missing; expected a table with diameter")
+    diameter = wt.quantity("diameter", "length")
+    wellbore = build_within(wt.path, Wellbore, diameter, axis or wt.string("axis", "y", AXES))
+    wt.finish()
+    return wellbore
+
+
 def _read_block_scene(
     top: TomlTable, sizing: MeshSizing, zone: FracturableZone | None, axes: tuple[str, ...]
 ) -> PerforatedBlock:
@@ -354,16 +365,7 @@ def _read_block_scene(
     )
     bt.finish()
     block = build_within(bt.path, Block, size)
-    wt = top.table("wellbore")
-    if wt is None:
-        raise SceneError(top.sub("wellbore"), "missing; expected a table with diameter")
-    wellbore = build_within(
-        wt.path,
-        Wellbore,
-        wt.quantity("diameter", "length"),
-        wt.string("axis", "y", AXES),
-    )
-    wt.finish()
+    wellbore = _read_wellbore(top)
     perforations = [_read_perforation(t, wellbore) for t in top.tables("perforations")]
     ct = top.table("cluster")
     if ct is not None:
@@ -398,11 +400,7 @@ def _read_plate_scene(
     )
     pt.finish()
     if kind == "borehole_plate":
-        wt = top.table("wellbore")
-        if wt is None:
-            raise SceneError(top.sub("wellbore"), "missing; expected a table with diameter")
-        wellbore = build_within(wt.path, Wellbore, wt.quantity("diameter", "length"), "z")
-        wt.finish()
+        wellbore = _read_wellbore(top, axis="z")
         return build_within(top.path, BoreholeSquare, plate, wellbore, sizing, zone, axes)
     ct = top.table("crack")
     if ct is None:

@@ -3,8 +3,10 @@
 ``tagged`` holds :class:`~hfcdem.mesh.tagged.TaggedMesh` (the mesh with its cell
 and facet groups by name) and the Gmsh-to-DOLFINx transfer (Gmsh on rank 0);
 ``block`` builds the 3D wellbore and perforation tunnels in a rock block,
-``plates`` the 2D plates; ``build`` meshes a scene and reports how the mesh
-measures against the analytic shapes; ``picture`` draws it.
+``plates`` the 2D plates, both placed with ``frames`` and sized by
+``grading``; ``build`` meshes a scene and reports how the mesh measures against
+the analytic shapes; ``picture`` draws it.  ``verification`` holds the meshes
+the CDEM tests and benchmarks were verified on.
 """
 
 __all__: list[str] = []

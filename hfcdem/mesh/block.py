@@ -49,51 +49,15 @@ from hfcdem.config.parts import (
     axis_vector,
     tunnel_extension,
 )
-
-
-@dataclass(frozen=True)
-class TunnelFrame:
-    """Local frame of a perforation: axis ``d``, wellbore axis ``w``, third axis ``t = d x w``.
-
-    ``origin`` is on the wellbore axis; ``start`` on the wall (station 0).
-    """
-
-    profile: Profile
-    origin: np.ndarray
-    start: np.ndarray
-    d: np.ndarray
-    w: np.ndarray
-    t: np.ndarray
-    wellbore_radius: float
-    delta: float
-    inner_radius: float
-
-    def local(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Station along the axis (from the wall) and distance from the axis of ``points``."""
-        rel = np.asarray(points) - self.start
-        a = rel @ self.d
-        radial = rel - np.outer(a, self.d)
-        return a, np.linalg.norm(radial, axis=1)
-
-
-def tunnel_frame(geom: PerforatedBlock, k: int) -> TunnelFrame:
-    """Return the frame of perforation ``k`` (from 0)."""
-    perf = geom.perforations[k]
-    w = axis_vector(geom.wellbore.axis)
-    d = np.asarray(perf.direction)
-    delta, r_in = tunnel_extension(perf.profile, geom.wellbore.radius)
-    return TunnelFrame(
-        profile=perf.profile,
-        origin=perf.entry * w,
-        start=perf.start(geom.wellbore),
-        d=d,
-        w=w,
-        t=np.cross(d, w),
-        wellbore_radius=geom.wellbore.radius,
-        delta=delta,
-        inner_radius=r_in,
-    )
-
+from hfcdem.mesh.frames import (
+    Residual,
+    TunnelFrame,
+    kept_corners,
+    plane_residual,
+    slab_box,
+    tunnel_frame,
+)
+from hfcdem.mesh.grading import add_grading, use_gradings
 
 # ---------------------------------------------------------------------------
 # Analytic measures
@@ -202,30 +166,13 @@ def tunnel_measures(profile: Profile, wellbore_radius: float) -> TunnelMeasures:
     )
 
 
-def kept_box(geom: PerforatedBlock) -> tuple[np.ndarray, np.ndarray]:
-    """Lower and upper corners of the modelled part of the block."""
-    hi = geom.block.half.copy()
-    lo = -hi
-    for axis in geom.symmetry:
-        lo[axis_index(axis)] = 0.0
-    return lo, hi
-
-
-def _factor(geom: PerforatedBlock, k: int, skip: str | None = None) -> float:
-    fraction = 1.0
-    for axis in geom.symmetry:
-        if axis != skip:
-            fraction *= {"cut": 0.5, "kept": 1.0, "dropped": 0.0}[geom.relation(k, axis)]
-    return fraction
-
-
 def expected_measures(geom: PerforatedBlock) -> dict[str, Any]:
     """Analytic volumes and facet-group areas of the modelled part of ``geom``.
 
     Returns ``{"volume": rock volume, "cavity": cavity volume, "areas": {tag:
     area}, "perforations": {K: {...}}}``; all for the kept part of the model.
     """
-    lo, hi = kept_box(geom)
+    lo, hi = kept_corners(geom.block.half, geom.symmetry)
     ext = hi - lo
     big_r = geom.wellbore.radius
     wi = axis_index(geom.wellbore.axis)
@@ -238,7 +185,7 @@ def expected_measures(geom: PerforatedBlock) -> dict[str, Any]:
     cavity = wellbore_volume
     areas: dict[str, float] = {}
     for k, perf in enumerate(geom.perforations):
-        frac = _factor(geom, k)
+        frac = geom.kept_fraction(k)
         if frac == 0.0:
             continue
         m = tunnel_measures(perf.profile, big_r)
@@ -292,7 +239,7 @@ def _symmetry_face(geom: PerforatedBlock, axis: str, face: float) -> float:
         section = m.axial_section
         if axis == geom.wellbore.axis:
             section += m.sliver.plane_area
-        area -= section * _factor(geom, k, skip=axis)
+        area -= section * geom.kept_fraction(k, skip=axis)
     return float(area)
 
 
@@ -330,12 +277,7 @@ def _add_zone(occ: Any, geom: PerforatedBlock) -> tuple[int, int] | None:
         reach = geom.wellbore.radius + frame.profile.length + zone.beyond_tip
         return (3, occ.addCylinder(*frame.origin, *(reach * frame.d), zone.radius))
     assert isinstance(zone, SlabZone)
-    big = 2.0 * geom.block.half + 1.0
-    corner = -0.5 * big
-    i = axis_index(zone.axis)
-    corner[i] = zone.offset - 0.5 * zone.thickness
-    size = big.copy()
-    size[i] = zone.thickness
+    corner, size = slab_box(zone, geom.block.half)
     return (3, occ.addBox(*corner, *size))
 
 
@@ -360,21 +302,9 @@ def _sample_surface(model: Any, tag: int) -> np.ndarray:
     return np.asarray(pts)
 
 
-Residual = Callable[[np.ndarray], np.ndarray]
-
-
-def plane_residual(i: int, value: float) -> Residual:
-    """Distance of points to the plane ``x[i] = value``."""
-
-    def residual(p: np.ndarray) -> np.ndarray:
-        return np.abs(p[:, i] - value)
-
-    return residual
-
-
 def face_candidates(geom: PerforatedBlock) -> list[tuple[str, int, Residual]]:
     """(tag name, segment, distance of points to that analytic surface) for every face kind."""
-    lo, hi = kept_box(geom)
+    lo, hi = kept_corners(geom.block.half, geom.symmetry)
     out: list[tuple[str, int, Residual]] = []
     for i, axis in enumerate(AXES):
         out.append((f"outer_{axis}max", -1, plane_residual(i, float(hi[i]))))
@@ -389,7 +319,7 @@ def face_candidates(geom: PerforatedBlock) -> list[tuple[str, int, Residual]]:
 
     out.append(("wellbore_wall", -1, wellbore))
     for k in range(len(geom.perforations)):
-        if _factor(geom, k) == 0.0:
+        if geom.kept_fraction(k) == 0.0:
             continue
         frame = tunnel_frame(geom, k)
         length = frame.profile.length
@@ -448,21 +378,19 @@ def classify_faces(
 
 
 def _threshold(model: Any, faces: list[int], start: float, geom: PerforatedBlock) -> int:
-    field = model.mesh.field
-    dist = field.add("Distance")
-    field.setNumbers(dist, "SurfacesList", faces)
     extent = max(
         float(np.max(np.subtract(model.getBoundingBox(2, f)[3:], model.getBoundingBox(2, f)[:3])))
         for f in faces
     )
-    field.setNumber(dist, "Sampling", int(np.clip(np.ceil(2.0 * extent / start), 20, 200)))
-    thr = field.add("Threshold")
-    field.setNumber(thr, "InField", dist)
-    field.setNumber(thr, "SizeMin", start)
-    field.setNumber(thr, "SizeMax", geom.mesh.size_far)
-    field.setNumber(thr, "DistMin", 0.0)
-    field.setNumber(thr, "DistMax", max(geom.mesh.growth_distance(start), 1e-9))
-    return int(thr)
+    return add_grading(
+        model,
+        2,
+        faces,
+        start,
+        geom.mesh.size_far,
+        max(geom.mesh.growth_distance(start), 1e-9),
+        int(np.clip(np.ceil(2.0 * extent / start), 20, 200)),
+    )
 
 
 def _set_sizes(model: Any, geom: PerforatedBlock, groups: dict[str, list[tuple[int, int]]]) -> None:
@@ -484,15 +412,7 @@ def _set_sizes(model: Any, geom: PerforatedBlock, groups: dict[str, list[tuple[i
         elif name == "wellbore_wall":
             faces = [f for f, _ in entries]
             thresholds.append(_threshold(model, faces, geom.wellbore_size, geom))
-    field = model.mesh.field
-    smallest = field.add("Min")
-    field.setNumbers(smallest, "FieldsList", thresholds)
-    field.setAsBackgroundMesh(smallest)
-    for opt in ("MeshSizeFromPoints", "MeshSizeFromCurvature", "MeshSizeExtendFromBoundary"):
-        gmsh.option.setNumber(f"Mesh.{opt}", 0)
-    # 1D meshing integrates 1/size along curves; the default 1e-9 costs seconds per scene
-    gmsh.option.setNumber("Mesh.LcIntegrationPrecision", 1e-4)
-    gmsh.option.setNumber("Mesh.MeshSizeMax", geom.mesh.size_far)
+    use_gradings(model, thresholds, geom.mesh.size_far)
     gmsh.option.setNumber("Mesh.Algorithm3D", geom.mesh.ALGORITHMS[geom.mesh.algorithm])
 
 
@@ -511,7 +431,7 @@ def build_perforated_block(geom: PerforatedBlock, model: Any) -> dict[str, Any]:
     """
     gmsh.option.setNumber("General.NumThreads", 1)  # reproducible meshes
     occ = model.occ
-    lo, hi = kept_box(geom)
+    lo, hi = kept_corners(geom.block.half, geom.symmetry)
     box = occ.addBox(*lo, *(hi - lo))
     w = axis_vector(geom.wellbore.axis)
     wi = axis_index(geom.wellbore.axis)
@@ -519,7 +439,7 @@ def build_perforated_block(geom: PerforatedBlock, model: Any) -> dict[str, Any]:
     wellbore = occ.addCylinder(*(-reach * w), *(2.0 * reach * w), geom.wellbore.radius)
     tools = [(3, wellbore)]
     for k in range(len(geom.perforations)):
-        if _factor(geom, k) > 0.0:
+        if geom.kept_fraction(k) > 0.0:
             tools.append(_add_tunnel(occ, tunnel_frame(geom, k)))
     rock, _ = occ.cut([(3, box)], tools)
     if len(rock) != 1:
@@ -559,17 +479,12 @@ def build_perforated_block(geom: PerforatedBlock, model: Any) -> dict[str, Any]:
 
 
 __all__ = [
-    "Residual",
     "SliverMeasures",
-    "TunnelFrame",
     "TunnelMeasures",
     "build_perforated_block",
     "classify_faces",
     "element_quality",
     "expected_measures",
-    "kept_box",
-    "plane_residual",
     "sliver_measures",
-    "tunnel_frame",
     "tunnel_measures",
 ]

@@ -32,6 +32,7 @@ from hfcdem.config.geometry import PerforatedBlock, Scene
 from hfcdem.io.files import prepare_output_dir, write_json
 from hfcdem.mesh import block as geometry
 from hfcdem.mesh import plates
+from hfcdem.mesh.frames import kept_corners, tunnel_frame
 from hfcdem.mesh.tagged import TaggedMesh, mesh_from_gmsh
 
 
@@ -86,7 +87,7 @@ def _tunnel_volume(sm: SceneMesh, k: int) -> float:
     geom = sm.scene.geometry
     assert isinstance(geom, PerforatedBlock)
     tm = sm.tmesh
-    frame = geometry.tunnel_frame(geom, k)
+    frame = tunnel_frame(geom, k)
     mesh = tm.mesh
     gdim = mesh.geometry.dim
 
@@ -138,9 +139,9 @@ def measure_mesh(sm: SceneMesh) -> dict[str, Any]:
     dS = ufl.Measure("dS", domain=mesh, subdomain_data=tm.facet_tags)
     volume = _assemble(comm, one * dx)
     if isinstance(geom, PerforatedBlock):
-        lo, hi = geometry.kept_box(geom)
+        lo, hi = kept_corners(geom.block.half, geom.symmetry)
     else:
-        lo, hi = plates.kept_rectangle(geom)
+        lo, hi = kept_corners(geom.plate.half[:2], geom.symmetry)
     box = float(np.prod(hi - lo))
     volumes: dict[str, Any] = {
         "rock_total": _pair(volume, expected["volume"]),

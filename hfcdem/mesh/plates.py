@@ -29,7 +29,6 @@ symmetry_x, _y     facet  mirror lines x = 0, y = 0 (the model keeps >= 0)
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 import gmsh
@@ -37,19 +36,11 @@ import numpy as np
 
 from hfcdem.config.geometry import BoreholeSquare, CrackPlate, KGDStrip
 from hfcdem.config.parts import SlabZone, SphereZone
-from hfcdem.mesh.block import element_quality, plane_residual
+from hfcdem.mesh.block import element_quality
+from hfcdem.mesh.frames import Residual, kept_corners, plane_residual, slab_box
+from hfcdem.mesh.grading import add_grading, use_gradings
 
 Plate2D = CrackPlate | KGDStrip | BoreholeSquare
-Residual = Callable[[np.ndarray], np.ndarray]
-
-
-def kept_rectangle(geom: Plate2D) -> tuple[np.ndarray, np.ndarray]:
-    """Lower and upper corners (x, y) of the modelled part of the plate."""
-    hi = geom.plate.half[:2].copy()
-    lo = -hi
-    for axis in geom.symmetry:
-        lo["xy".index(axis)] = 0.0
-    return lo, hi
 
 
 def _crack_lines(geom: Plate2D) -> dict[str, list[tuple[float, float]]]:
@@ -70,7 +61,7 @@ def _crack_lines(geom: Plate2D) -> dict[str, list[tuple[float, float]]]:
 
 def expected_measures(geom: Plate2D) -> dict[str, Any]:
     """Analytic area and line lengths of the modelled part of ``geom``."""
-    lo, hi = kept_rectangle(geom)
+    lo, hi = kept_corners(geom.plate.half[:2], geom.symmetry)
     ext = hi - lo
     lengths: dict[str, float] = {}
     hole = 0.0
@@ -101,17 +92,12 @@ def _add_zone(occ: Any, geom: Plate2D) -> tuple[int, int] | None:
     if isinstance(zone, SphereZone):
         return (2, occ.addDisk(zone.centre[0], zone.centre[1], 0.0, zone.radius, zone.radius))
     assert isinstance(zone, SlabZone)
-    big = 2.0 * geom.plate.half[:2] + 1.0
-    corner = -0.5 * big
-    i = "xy".index(zone.axis)
-    corner[i] = zone.offset - 0.5 * zone.thickness
-    size = big.copy()
-    size[i] = zone.thickness
+    corner, size = slab_box(zone, geom.plate.half[:2])
     return (2, occ.addRectangle(corner[0], corner[1], 0.0, size[0], size[1]))
 
 
 def curve_candidates(geom: Plate2D) -> list[tuple[str, Residual]]:
-    lo, hi = kept_rectangle(geom)
+    lo, hi = kept_corners(geom.plate.half[:2], geom.symmetry)
     out: list[tuple[str, Residual]] = []
     for i, axis in enumerate("xy"):
         out.append((f"outer_{axis}max", plane_residual(i, float(hi[i]))))
@@ -142,7 +128,7 @@ def build_plate(geom: Plate2D, model: Any) -> dict[str, Any]:
     """Create the geometry, physical groups and 2D mesh of ``geom`` in the Gmsh ``model``."""
     gmsh.option.setNumber("General.NumThreads", 1)
     occ = model.occ
-    lo, hi = kept_rectangle(geom)
+    lo, hi = kept_corners(geom.plate.half[:2], geom.symmetry)
     plate = [(2, occ.addRectangle(lo[0], lo[1], 0.0, *(hi - lo)))]
     if isinstance(geom, BoreholeSquare):
         big_r = geom.wellbore.radius
@@ -188,23 +174,11 @@ def build_plate(geom: Plate2D, model: Any) -> dict[str, Any]:
 
     refined = [c for n in ("crack", "fracture_path", "wellbore_wall") for c in groups.get(n, [])]
     start = geom.wall_size if isinstance(geom, BoreholeSquare) else geom.mesh.size
-    field = model.mesh.field
-    dist = field.add("Distance")
-    field.setNumbers(dist, "CurvesList", refined)
     span = float(max(hi - lo))
-    field.setNumber(dist, "Sampling", int(np.clip(np.ceil(2.0 * span / start), 50, 2000)))
-    thr = field.add("Threshold")
-    field.setNumber(thr, "InField", dist)
-    field.setNumber(thr, "SizeMin", start)
-    field.setNumber(thr, "SizeMax", geom.mesh.size_far)
-    field.setNumber(thr, "DistMin", 0.0)
-    field.setNumber(thr, "DistMax", max(geom.mesh.growth_distance(start), 1e-9))
-    field.setAsBackgroundMesh(thr)
-    for opt in ("MeshSizeFromPoints", "MeshSizeFromCurvature", "MeshSizeExtendFromBoundary"):
-        gmsh.option.setNumber(f"Mesh.{opt}", 0)
-    # 1D meshing integrates 1/size along curves; the default 1e-9 costs seconds per scene
-    gmsh.option.setNumber("Mesh.LcIntegrationPrecision", 1e-4)
-    gmsh.option.setNumber("Mesh.MeshSizeMax", geom.mesh.size_far)
+    sampling = int(np.clip(np.ceil(2.0 * span / start), 50, 2000))
+    dist_max = max(geom.mesh.growth_distance(start), 1e-9)
+    grading = add_grading(model, 1, refined, start, geom.mesh.size_far, dist_max, sampling)
+    use_gradings(model, [grading], geom.mesh.size_far)
     model.mesh.generate(2)
     return {
         "quality": element_quality(model, 2),
@@ -214,8 +188,6 @@ def build_plate(geom: Plate2D, model: Any) -> dict[str, Any]:
 
 __all__ = [
     "Plate2D",
-    "Residual",
     "build_plate",
     "expected_measures",
-    "kept_rectangle",
 ]
