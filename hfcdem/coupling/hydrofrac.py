@@ -831,9 +831,7 @@ class HydraulicFracture:
     def _save_states(self) -> tuple:
         solid = self.solid
         return (
-            solid.state.copy(),
-            solid.contact.copy(),
-            solid.friction_traction.copy(),
+            solid.states.copy(),
             len(solid.events),
             dict(self._content),
             dict(self._wet_since),
@@ -844,11 +842,11 @@ class HydraulicFracture:
 
     def _restore_states(self, saved: tuple) -> None:
         solid = self.solid
-        changed = self.rebuilds != saved[8]
-        solid.state[:], solid.contact[:], solid.friction_traction[:] = saved[:3]
-        del solid.events[saved[3] :]
-        self._content, self._wet_since, self._pressure = saved[4], saved[5], saved[6]
-        self.first_break_time = saved[7]
+        changed = self.rebuilds != saved[6]
+        solid.states.restore(saved[0])
+        del solid.events[saved[1] :]
+        self._content, self._wet_since, self._pressure = saved[2], saved[3], saved[4]
+        self.first_break_time = saved[5]
         if changed:
             self._rebuild()
 

@@ -2,7 +2,9 @@
 
 ``elastic`` holds the rock (:class:`ElasticMaterial`), the in-situ stress and
 continuous elasticity; ``interfaces`` the strengths and failure checks (pure
-NumPy); ``cdem`` the DG blocks, springs, contact and break state machine.
+NumPy); ``facets`` the interface facets and their geometry; ``states`` their
+failure/contact states; ``forms`` the UFL forms, loads and boundary conditions;
+``cdem`` composes them: the solver and the break state machine.
 """
 
 __all__: list[str] = []

@@ -15,6 +15,10 @@ cell, so every facet is a potential interface.
 The unknown is the perturbation of the in-situ state (see :mod:`hfcdem.solid.elastic`).
 Interface traction on the ``+`` side: ``t = sigma0 n+ - K (u+ - u-)`` while
 intact or closed; ``-p n+`` while open with fluid pressure ``p``.
+
+:class:`CDEMSolid` composes the interface facets and their geometry
+(:mod:`~hfcdem.solid.facets`), their states (:mod:`~hfcdem.solid.states`) and the
+forms (:mod:`~hfcdem.solid.forms`); it owns the solver and the break state machine.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import dolfinx
 import dolfinx.fem.petsc
@@ -32,46 +36,34 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from hfcdem.mesh.tagged import TaggedMesh
-from hfcdem.solid.elastic import ElasticMaterial, InSituStress, strain, stress
+from hfcdem.solid.elastic import ElasticMaterial, InSituStress, stress
+from hfcdem.solid.facets import FacetFunctions, InterfaceFacets, ZoneMarker
+from hfcdem.solid.forms import (
+    GLUE,
+    OPEN_FACETS,
+    SLIP_FACETS,
+    SPRING,
+    Loads,
+    SolidForms,
+    combine,
+    dg_boundary_conditions,
+    interface_tags,
+    rigid_body_modes,
+)
 from hfcdem.solid.interfaces import (
     FacetState,
     InterfaceModel,
     check_failure,
+    critical_factors,
     select_breaking,
     stable_facet_hash,
     weibull_scatter,
 )
+from hfcdem.solid.states import OPEN, SLIP, STICK, InterfaceStates
 from hfcdem.solvers import DIRECT_CHOLESKY, check_ksp, create_ksp, setup_factorisation
-
-# interior-facet integral ids
-SPRING = 1  # intact, or broken and closed in stick: kn and ks
-OPEN_FACETS = 2  # broken/pre-existing and open: fluid pressure, no springs
-SLIP_FACETS = 3  # broken, closed, sliding: kn and a friction traction
-GLUE = 4  # outside the zone: Nitsche continuity
-
-# contact sub-states of broken facets
-OPEN, STICK, SLIP = 0, 1, 2
-
-ZoneMarker = Callable[[np.ndarray], np.ndarray]
 
 # solver="auto": direct (MUMPS) up to this many unknowns, CG + GAMG beyond
 AUTO_DIRECT_MAX_DOFS = 300_000
-
-
-@dataclass(frozen=True)
-class Loads:
-    """Loads of one solve: in-situ stress plus fluid pressures (Pa).
-
-    ``cavity`` maps exterior facet-group names to pressure; ``crack_pressure``
-    acts on every open broken or pre-existing interface (a number, or one value
-    per local facet of :attr:`CDEMSolid.facets`).  ``joint_pressure`` (one value
-    per local facet) acts inside intact interfaces holding fluid.
-    """
-
-    cavity: Mapping[str, float] = field(default_factory=dict)
-    crack_pressure: float | np.ndarray = 0.0
-    joint_pressure: np.ndarray | None = None
-    in_situ_factor: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -120,6 +112,10 @@ class CDEMSolid:
             raise ValueError(f"degree must be 1 or 2 (DG blocks), got {degree!r}")
         if solver not in ("direct", "iterative", "auto"):
             raise ValueError(f"solver must be 'direct', 'iterative' or 'auto', got {solver!r}")
+        if strength_points not in ("vertices", "midpoint"):
+            raise ValueError(
+                f"strength_points must be 'vertices' or 'midpoint', got {strength_points!r}"
+            )
         self.tmesh = tmesh
         self.mesh = mesh = tmesh.mesh
         self.comm: MPI.Comm = mesh.comm
@@ -145,297 +141,137 @@ class CDEMSolid:
         self._u_unit = dolfinx.fem.Function(self.V)
         self.sigma0 = in_situ.tensor(gdim)
 
-        if strength_points not in ("vertices", "midpoint"):
-            raise ValueError(
-                f"strength_points must be 'vertices' or 'midpoint', got {strength_points!r}"
-            )
-        self._classify_facets(zone, cracks)
-        self._facet_geometry()
+        self.interface_facets = InterfaceFacets.build(tmesh, zone, cracks)
+        self.facet_functions = FacetFunctions(mesh, self.interface_facets)
+        self.kn = interfaces.alpha * material.youngs_modulus / self.h
+        self.ks = self.kn * interfaces.shear_stiffness_ratio(material.poisson_ratio)
         if strength_points == "midpoint":
             self.strength_points = [self.midpoints]
         else:
-            self.strength_points = [
-                self.vertex_coords[:, k] for k in range(self.vertex_coords.shape[1])
-            ]
-        self._strengths()
-        self._bcs = self._boundary_conditions(rollers or {}, fixed)
-        self._nitsche = nitsche_penalty if nitsche_penalty is not None else 10.0 * (degree + 1) ** 2
+            vx = self.vertex_coords
+            self.strength_points = [vx[:, k] for k in range(vx.shape[1])]
+        self.t0, self.c0 = self._strengths()
+        self._bcs = dg_boundary_conditions(self.V, tmesh, degree, rollers or {}, fixed)
+        nitsche = nitsche_penalty if nitsche_penalty is not None else 10.0 * (degree + 1) ** 2
+        self.forms = SolidForms(
+            tmesh, self.V, material, interfaces, self.sigma0, nitsche, self.facet_functions
+        )
         # facets that ever broke, and their contact sub-state
-        self.contact = np.full(self.num_facets, OPEN, dtype=np.int8)
-        self.contact[~self.is_crack] = STICK
-        self.friction_traction = np.zeros((self.num_facets, gdim))
+        self.states = InterfaceStates.initial(self.is_crack, gdim)
         self.solves = 0
         self.solve_seconds = 0.0
         self.events: list[BreakEvent] = []
         self.progress: Callable[[str], None] | None = None
-        self._cr_cache: dict[tuple[int, ...], tuple[dolfinx.fem.FunctionSpace, np.ndarray]] = {}
-        scalar = dolfinx.default_scalar_type
-        self._c_kn = dolfinx.fem.Constant(mesh, scalar(self.model.alpha * material.youngs_modulus))
-        self._c_ratio = dolfinx.fem.Constant(
-            mesh, scalar(self.model.shear_stiffness_ratio(material.poisson_ratio))
-        )
-        self._c_residual = dolfinx.fem.Constant(mesh, scalar(self.model.residual_stiffness))
-        lam2mu = material.lame_lambda + 2.0 * material.shear_modulus
-        self._c_glue = dolfinx.fem.Constant(mesh, scalar(self._nitsche * lam2mu))
 
-    # ------------------------------------------------------------------ setup
+    # ------------------------------------------------------- facets and states
 
-    def _classify_facets(self, zone: ZoneMarker | str | None, cracks: Sequence[str]) -> None:
-        mesh, tdim = self.mesh, self.mesh.topology.dim
-        fmap = mesh.topology.index_map(tdim - 1)
-        num_local = fmap.size_local + fmap.num_ghosts
-        f2c = mesh.topology.connectivity(tdim - 1, tdim)
-        counts = np.diff(f2c.offsets)
-        interior = np.flatnonzero(counts == 2).astype(np.int32)
-        crack_mask = np.zeros(num_local, dtype=bool)
-        for name in cracks:
-            if name in self.tmesh.facet_names:
-                crack_mask[self.tmesh.facets(name)] = True
-        # crack facets must be interior: a crack on the boundary is just a loaded face
-        crack_mask &= counts == 2
+    @property
+    def facets(self) -> np.ndarray:
+        """Local facet indices of this rank's interfaces (owned and ghost)."""
+        return self.interface_facets.facets
 
-        num_cells = (
-            mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts
-        )
-        if zone is None:
-            in_zone_cell = np.ones(num_cells, dtype=bool)
-        elif isinstance(zone, str) and zone in self.tmesh.facet_names:
-            # a facet group: springs on exactly those facets (a prescribed fracture path)
-            in_zone_cell = np.zeros(num_cells, dtype=bool)
-        elif isinstance(zone, str):
-            if zone not in self.tmesh.cell_names:
-                known = ", ".join(sorted(self.tmesh.cell_names) + sorted(self.tmesh.facet_names))
-                raise KeyError(
-                    f"fracturable zone {zone!r} is not a cell or facet group; known: {known}"
-                )
-            in_zone_cell = np.zeros(num_cells, dtype=bool)
-            in_zone_cell[self.tmesh.cell_tags.find(self.tmesh.cell_names[zone])] = True
-        else:
-            mids = dolfinx.mesh.compute_midpoints(mesh, tdim, np.arange(num_cells, dtype=np.int32))
-            in_zone_cell = np.asarray(zone(mids.T), dtype=bool)
-        cells = f2c.array.reshape(-1)  # interior facets only are indexed below
-        first = f2c.offsets[interior]
-        c0, c1 = cells[first], cells[first + 1]
-        zone_facet = in_zone_cell[c0] & in_zone_cell[c1]
-        if isinstance(zone, str) and zone in self.tmesh.facet_names:
-            path_mask = np.zeros(num_local, dtype=bool)
-            path_mask[self.tmesh.facets(zone)] = True
-            zone_facet = path_mask[interior]
+    @property
+    def num_facets(self) -> int:
+        """Number of interface facets on this rank (owned and ghost)."""
+        return self.interface_facets.num_facets
 
-        keep = zone_facet | crack_mask[interior]
-        self.facets = interior[keep]  # local facet indices carrying springs or cracks
-        self.num_facets = len(self.facets)
-        self.cells = np.column_stack([c0[keep], c1[keep]]).astype(np.int32)
-        self.is_crack = crack_mask[self.facets]
-        self.glue_facets = interior[~keep]
-        self.owned = self.facets < fmap.size_local
-        self.state = np.where(self.is_crack, FacetState.TENSILE, FacetState.INTACT).astype(np.int8)
+    @property
+    def cells(self) -> np.ndarray:
+        """(F, 2) cells on either side of each interface; n+ points out of the first."""
+        return self.interface_facets.cells
 
-    def _facet_geometry(self) -> None:
-        mesh, tdim, gdim = self.mesh, self.mesh.topology.dim, self.gdim
-        # DOLFINx divides by the entity count: a rank without interfaces must not ask
-        nverts = tdim
-        if self.num_facets:
-            nodes = dolfinx.mesh.entities_to_geometry(mesh, tdim - 1, self.facets, False)
-        else:
-            nodes = np.zeros((0, nverts), dtype=np.int32)
-        x = mesh.geometry.x[nodes][..., :gdim]  # (F, nverts, gdim)
-        self.vertex_coords = mesh.geometry.x[nodes]
-        self.midpoints = self.vertex_coords.mean(axis=1)
-        if gdim == 2:
-            t = x[:, 1] - x[:, 0]
-            self.areas = np.linalg.norm(t, axis=1)
-            normals = np.column_stack([t[:, 1], -t[:, 0]])
-        else:
-            cr = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0])
-            self.areas = 0.5 * np.linalg.norm(cr, axis=1)
-            normals = cr
-        normals /= np.linalg.norm(normals, axis=1)[:, None]
-        # orient n+ out of the first cell
-        cmid = (
-            dolfinx.mesh.compute_midpoints(mesh, tdim, self.cells[:, 0])[:, :gdim]
-            if self.num_facets
-            else np.zeros((0, gdim))
-        )
-        flip = np.einsum("ij,ij->i", normals, self.midpoints[:, :gdim] - cmid) < 0.0
-        normals[flip] *= -1.0
-        self.normals = normals
-        hc = (
-            mesh.h(tdim, self.cells.reshape(-1)).reshape(-1, 2)
-            if self.num_facets
-            else np.zeros((0, 2))
-        )
-        self.h = hc.mean(axis=1)
-        self.kn = self.model.alpha * self.material.youngs_modulus / self.h
-        self.ks = self.kn * self.model.shear_stiffness_ratio(self.material.poisson_ratio)
-        inputs = mesh.geometry.input_global_indices
-        self.vertex_ids = np.asarray(inputs)[nodes].astype(np.int64)
+    @property
+    def is_crack(self) -> np.ndarray:
+        """Per interface: a pre-existing crack."""
+        return self.interface_facets.is_crack
 
-    def _strengths(self) -> None:
+    @property
+    def glue_facets(self) -> np.ndarray:
+        """Local indices of the glued interior facets (outside the zone)."""
+        return self.interface_facets.glue_facets
+
+    @property
+    def owned(self) -> np.ndarray:
+        """Per interface: owned by this rank."""
+        return self.interface_facets.owned
+
+    @property
+    def vertex_coords(self) -> np.ndarray:
+        """(F, nv, 3) vertex coordinates of each interface."""
+        return self.interface_facets.vertex_coords
+
+    @property
+    def midpoints(self) -> np.ndarray:
+        """(F, 3) midpoint of each interface."""
+        return self.interface_facets.midpoints
+
+    @property
+    def normals(self) -> np.ndarray:
+        """(F, gdim) unit normal n+ of each interface."""
+        return self.interface_facets.normals
+
+    @property
+    def areas(self) -> np.ndarray:
+        """Area (2D: length) of each interface."""
+        return self.interface_facets.areas
+
+    @property
+    def h(self) -> np.ndarray:
+        """Mean diameter of the two cells of each interface."""
+        return self.interface_facets.h
+
+    @property
+    def vertex_ids(self) -> np.ndarray:
+        """(F, nv) global input ids of the vertices of each interface."""
+        return self.interface_facets.vertex_ids
+
+    @property
+    def state(self) -> np.ndarray:
+        """Failure state per interface: 0 intact, 1 tensile, 2 shear."""
+        return self.states.state
+
+    @property
+    def contact(self) -> np.ndarray:
+        """Contact sub-state per interface: open, stick or slip."""
+        return self.states.contact
+
+    @property
+    def friction_traction(self) -> np.ndarray:
+        """(F, gdim) Coulomb traction of sliding interfaces on their + face."""
+        return self.states.friction_traction
+
+    def _strengths(self) -> tuple[np.ndarray, np.ndarray]:
+        """Tensile strength and cohesion per interface (Weibull scatter keyed by vertex ids)."""
         m = self.model
         if m.weibull_modulus is None:
-            self.t0 = np.full(self.num_facets, m.tensile_strength)
-            self.c0 = np.full(self.num_facets, m.cohesion)
-        else:
-            u1 = stable_facet_hash(self.vertex_ids, m.seed)
-            u2 = stable_facet_hash(self.vertex_ids, m.seed + 7919)
-            self.t0 = weibull_scatter(m.tensile_strength, m.weibull_modulus, u1)
-            self.c0 = weibull_scatter(m.cohesion, m.weibull_modulus, u2)
-
-    def _boundary_conditions(
-        self, rollers: Mapping[str, int], fixed: Sequence[str]
-    ) -> list[dolfinx.fem.DirichletBC]:
-        """Dirichlet conditions on DG dofs that lie on the named boundary facets."""
-        mesh, tdim = self.mesh, self.mesh.topology.dim
-        import basix
-
-        cg = basix.create_element(
-            basix.ElementFamily.P, mesh.basix_cell(), self.degree, basix.LagrangeVariant.gll_warped
+            return np.full(self.num_facets, m.tensile_strength), np.full(
+                self.num_facets, m.cohesion
+            )
+        u1 = stable_facet_hash(self.vertex_ids, m.seed)
+        u2 = stable_facet_hash(self.vertex_ids, m.seed + 7919)
+        return (
+            weibull_scatter(m.tensile_strength, m.weibull_modulus, u1),
+            weibull_scatter(m.cohesion, m.weibull_modulus, u2),
         )
-        closure = cg.entity_closure_dofs[tdim - 1]
-        c2f = mesh.topology.connectivity(tdim, tdim - 1)
-        f2c = mesh.topology.connectivity(tdim - 1, tdim)
-        bcs = []
-        items = [(name, comp) for name, comp in rollers.items()]
-        items += [(name, c) for name in fixed for c in range(self.gdim)]
-        for name, comp in items:
-            if not 0 <= comp < self.gdim:
-                raise ValueError(f"roller component for {name!r} must be in [0, {self.gdim})")
-            sub = self.V.sub(comp)
-            dofs = []
-            for f in self.tmesh.facets(name):
-                for c in f2c.links(f):
-                    local = int(np.flatnonzero(c2f.links(c) == f)[0])
-                    cell_dofs = sub.dofmap.cell_dofs(c)
-                    dofs.extend(cell_dofs[closure[local]])
-            dofs_arr = np.unique(np.asarray(dofs, dtype=np.int32))
-            bcs.append(dolfinx.fem.dirichletbc(dolfinx.default_scalar_type(0.0), dofs_arr, sub))
-        return bcs
 
     # ------------------------------------------------------------------ forms
 
     def interface_tags(self) -> dolfinx.mesh.MeshTags:
         """Tag interface facets by their integral: SPRING, OPEN_FACETS, SLIP_FACETS or GLUE."""
-        broken = self.state != FacetState.INTACT
-        values = np.full(self.num_facets, SPRING, dtype=np.int32)
-        values[broken & (self.contact == OPEN)] = OPEN_FACETS
-        values[broken & (self.contact == SLIP)] = SLIP_FACETS
-        idx = np.concatenate([self.facets, self.glue_facets]).astype(np.int32)
-        vals = np.concatenate([values, np.full(len(self.glue_facets), GLUE, dtype=np.int32)])
-        order = np.argsort(idx)
-        return dolfinx.mesh.meshtags(self.mesh, self.mesh.topology.dim - 1, idx[order], vals[order])
+        return interface_tags(self.mesh, self.interface_facets, self.states)
 
     def facet_dofs(self, shape: tuple[int, ...] = ()) -> np.ndarray:
         """Dofs of the Crouzeix-Raviart space of ``shape`` at this rank's interface facets."""
-        if shape not in self._cr_cache:
-            self.facet_function(np.zeros((self.num_facets, *shape)), shape)
-        return self._cr_cache[shape][1]
+        return self.facet_functions.dofs(shape)
 
     def facet_function(
         self, values: np.ndarray, shape: tuple[int, ...] = ()
     ) -> dolfinx.fem.Function:
         """Return per-facet values as a Crouzeix-Raviart function (exact at facet midpoints)."""
-        if shape not in self._cr_cache:
-            V = dolfinx.fem.functionspace(self.mesh, ("CR", 1, shape) if shape else ("CR", 1))
-            self._cr_cache[shape] = (V, self._cr_dofs(V))
-        V, dofs = self._cr_cache[shape]
-        f = dolfinx.fem.Function(V)
-        bs = V.dofmap.index_map_bs
-        f.x.array.reshape(-1, bs)[dofs] = np.asarray(values).reshape(len(dofs), bs)
-        f.x.scatter_forward()
-        return f
+        return self.facet_functions.function(values, shape)
 
-    def _cr_dofs(self, V: dolfinx.fem.FunctionSpace) -> np.ndarray:
-        tdim = self.mesh.topology.dim
-        c2f = self.mesh.topology.connectivity(tdim, tdim - 1)
-        c = self.cells[:, 0]
-        local = np.array(
-            [
-                int(np.flatnonzero(c2f.links(ci) == f)[0])
-                for ci, f in zip(c, self.facets, strict=True)
-            ]
-        )
-        return np.array(
-            [V.dofmap.cell_dofs(int(ci))[li] for ci, li in zip(c, local, strict=True)],
-            dtype=np.int32,
-        )
-
-    def _forms(self, loads_a: Loads, loads_b: Loads | None) -> tuple:
-        mesh, gdim = self.mesh, self.gdim
-        u, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
-        n = ufl.FacetNormal(mesh)
-        npl = n("+")
-        dS = ufl.Measure("dS", domain=mesh, subdomain_data=self.interface_tags())
-        h = ufl.avg(ufl.CellDiameter(mesh))
-        # stiffness factors as Constants: changing alpha or the rock never recompiles
-        kn = self._c_kn / h
-        ks = kn * self._c_ratio
-        eye = ufl.Identity(gdim)
-        Pn = ufl.outer(npl, npl)
-        K = kn * Pn + ks * (eye - Pn)
-        ju, jv = ufl.jump(u), ufl.jump(v)
-
-        a = ufl.inner(stress(u, self.material), strain(v)) * ufl.dx
-        a += ufl.inner(K * ju, jv) * dS(SPRING)
-        a += ufl.inner(kn * Pn * ju, jv) * dS(SLIP_FACETS)
-        # a residual spring on open and sliding faces keeps detached blocks attached
-        a += self._c_residual * ufl.inner(K * ju, jv) * dS(OPEN_FACETS)
-        a += self._c_residual * ks * ufl.inner((eye - Pn) * ju, jv) * dS(SLIP_FACETS)
-        # Nitsche glue outside the zone (symmetric interior penalty)
-        a += (
-            -ufl.inner(ufl.avg(stress(u, self.material)) * npl, jv)
-            - ufl.inner(ufl.avg(stress(v, self.material)) * npl, ju)
-            + self._c_glue / h * ufl.inner(ju, jv)
-        ) * dS(GLUE)
-
-        rhs = [self._rhs(loads, v, n, dS) for loads in ([loads_a] + ([loads_b] if loads_b else []))]
-        return a, rhs
-
-    def _rhs(self, loads: Loads, v, n, dS) -> ufl.Form:
-        """Load form; every number is a Constant so new load values never recompile."""
-        mesh, gdim = self.mesh, self.gdim
-        scalar = dolfinx.default_scalar_type
-
-        def const(value: float | np.ndarray) -> dolfinx.fem.Constant:
-            return dolfinx.fem.Constant(mesh, np.asarray(value, dtype=scalar))
-
-        sigma0 = const(loads.in_situ_factor * self.sigma0)
-        eye = ufl.Identity(gdim)
-        L = ufl.inner(const(np.zeros(gdim)), v) * ufl.dx
-        for name, p in loads.cavity.items():
-            if not math.isfinite(p):
-                raise ValueError(f"cavity pressure on {name!r} must be finite, got {p!r}")
-            L += -ufl.inner((const(p) * eye + sigma0) * n, v) * self.tmesh.ds(name)
-        npl = n("+")
-        if np.isscalar(loads.crack_pressure):
-            p_crack = const(float(loads.crack_pressure))  # type: ignore[arg-type]
-            L += -ufl.inner((p_crack * eye + sigma0) * npl, ufl.jump(v)) * dS(OPEN_FACETS)
-        else:
-            pf = self.facet_function(np.asarray(loads.crack_pressure))
-            L += -ufl.inner((pf("+") * eye + sigma0) * npl, ufl.jump(v)) * dS(
-                OPEN_FACETS, metadata={"quadrature_degree": 1}
-            )
-        has_joints = loads.joint_pressure is not None and bool(np.any(loads.joint_pressure))
-        if self.comm.allreduce(has_joints, op=MPI.LOR):  # collective, as below
-            jf = self.facet_function(
-                np.zeros(len(self.facets))
-                if loads.joint_pressure is None
-                else np.asarray(loads.joint_pressure)
-            )
-            L += -ufl.inner(jf("+") * npl, ufl.jump(v)) * dS(
-                SPRING, metadata={"quadrature_degree": 1}
-            )
-        # collective decision: building the facet function is collective
-        any_slip = self.comm.allreduce(bool(np.any(self.contact == SLIP)), op=MPI.LOR)
-        if any_slip and loads.in_situ_factor != 0.0:
-            # friction minus in-situ shear on sliding faces, per facet (+ side); a unit
-            # load (no in-situ part) is the linearisation about the current slip set
-            tf = self.facet_function(self.friction_traction, (gdim,))
-            tau0 = sigma0 * npl - ufl.inner(sigma0 * npl, npl) * npl
-            L += ufl.inner(tf("+") - tau0, ufl.jump(v)) * dS(
-                SLIP_FACETS, metadata={"quadrature_degree": 1}
-            )
-        return L
+    def _measure(self) -> ufl.Measure:
+        return ufl.Measure("dS", domain=self.mesh, subdomain_data=self.interface_tags())
 
     # ------------------------------------------------------------------ solve
 
@@ -447,28 +283,9 @@ class CDEMSolid:
             A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
         else:
             defaults = {"ksp_type": "cg", "pc_type": "gamg", "ksp_rtol": 1e-10, "ksp_max_it": 2000}
-            A.setNearNullSpace(self._rigid_modes())
+            space, self._modes = rigid_body_modes(self.V)  # kept: PETSc holds no copy
+            A.setNearNullSpace(space)
         return create_ksp(A, self.prefix, {**defaults, **self.petsc_options}, self.comm)
-
-    def _rigid_modes(self) -> PETSc.NullSpace:
-        """Rigid-body modes of the DG displacement, for the algebraic multigrid."""
-        x = self.V.tabulate_dof_coordinates()
-        gdim = self.gdim
-        modes = [
-            dolfinx.la.vector(self.V.dofmap.index_map, gdim) for _ in range(3 if gdim == 2 else 6)
-        ]
-        arrays = [m.array.reshape(-1, gdim) for m in modes]
-        for k in range(gdim):
-            arrays[k][:, k] = 1.0
-        if gdim == 2:
-            arrays[2][:, 0], arrays[2][:, 1] = -x[:, 1], x[:, 0]
-        else:
-            arrays[3][:, 0], arrays[3][:, 1] = -x[:, 1], x[:, 0]
-            arrays[4][:, 0], arrays[4][:, 2] = x[:, 2], -x[:, 0]
-            arrays[5][:, 2], arrays[5][:, 1] = x[:, 1], -x[:, 2]
-        dolfinx.la.orthonormalize(modes)
-        self._modes = modes  # PETSc keeps references to the vectors only
-        return PETSc.NullSpace().create(vectors=[m.petsc_vec for m in modes], comm=self.comm)
 
     def factorize(self) -> tuple[dolfinx.fem.Form, PETSc.KSP]:
         """Assemble the stiffness of the current interface states; return its form and solver.
@@ -477,8 +294,7 @@ class CDEMSolid:
         for any number of right-hand sides.
         """
         t0 = time.perf_counter()
-        a, _ = self._forms(Loads(), None)
-        a_form = dolfinx.fem.form(a)
+        a_form = dolfinx.fem.form(self.forms.stiffness(self._measure()))
         A = dolfinx.fem.petsc.assemble_matrix(a_form, bcs=self._bcs)
         A.assemble()
         if self.solver_kind == "direct":
@@ -522,10 +338,7 @@ class CDEMSolid:
 
     def load_form(self, loads: Loads) -> dolfinx.fem.Form:
         """Compiled right-hand side of ``loads`` for the current interface states."""
-        v = ufl.TestFunction(self.V)
-        n = ufl.FacetNormal(self.mesh)
-        dS = ufl.Measure("dS", domain=self.mesh, subdomain_data=self.interface_tags())
-        return dolfinx.fem.form(self._rhs(loads, v, n, dS))
+        return dolfinx.fem.form(self.forms.load(loads, self.states, self._measure()))
 
     def solve(self, loads: Loads, unit: Loads | None = None) -> None:
         """Solve for ``loads`` (and, with the same matrix, for ``unit`` into ``u_unit``)."""
@@ -583,33 +396,20 @@ class CDEMSolid:
         """Open/close/slip switches of broken facets; returns the global count of changes."""
         snap = self.snapshot(loads)
         broken = (self.state != FacetState.INTACT) & ~self.is_crack
-        pc = self._crack_pressure(loads)
         old = self.contact.copy()
-        mu = self.model.friction
-        # closed facets open when their normal traction exceeds the fluid pressure
-        closed = broken & (self.contact != OPEN)
-        opening = closed & (snap.normal_traction > -pc)
-        self.contact[opening] = OPEN
-        # open facets close when the faces interpenetrate
+        # open facets close when the faces interpenetrate past the pre-compression offset
         t0n = np.einsum(
             "fi,ij,fj->f", self.normals, loads.in_situ_factor * self.sigma0, self.normals
         )
         w_raw = -np.einsum("fi,fi->f", self._jumps(self.u), self.normals)
         offset = np.where(t0n < 0.0, -t0n / self.kn, 0.0)
-        closing = broken & (old == OPEN) & (w_raw < offset)
-        self.contact[closing] = STICK
-        # stick/slip by Coulomb on closed facets
-        closed = broken & (self.contact != OPEN)
-        limit = mu * np.maximum(-snap.normal_traction, 0.0)
-        trial = snap.shear_vector
-        mag = np.linalg.norm(trial, axis=1)
-        sliding = closed & (mag > limit * (1.0 + 1e-9))
-        self.contact[closed & ~sliding & (old != SLIP)] = STICK
-        self.contact[sliding] = SLIP
-        with np.errstate(invalid="ignore", divide="ignore"):
-            direction = np.where(mag[:, None] > 0.0, trial / mag[:, None], 0.0)
-        self.friction_traction = np.where(
-            (self.contact == SLIP)[:, None], direction * limit[:, None], 0.0
+        self.states.switch_contacts(
+            broken,
+            snap.normal_traction,
+            snap.shear_vector,
+            self._crack_pressure(loads),
+            w_raw < offset,
+            self.model.friction,
         )
         changed = int(np.count_nonzero((old != self.contact) & self.owned))
         return int(self.comm.allreduce(changed, op=MPI.SUM))
@@ -635,25 +435,16 @@ class CDEMSolid:
 
     def break_facets(self, facets: np.ndarray, modes: np.ndarray, load_factor: float) -> None:
         """Break local ``facets`` in ``modes`` (1 tensile, 2 shear) at ``load_factor``."""
-        self.state[facets] = modes
         # tensile breaks start open, shear breaks closed; update_contact corrects both
-        self.contact[facets] = np.where(modes == FacetState.TENSILE, OPEN, STICK)
+        self.states.break_facets(facets, modes)
         self.sync_ghost_states()
         mids = self.midpoints[facets]
         self.events.append(BreakEvent(load_factor, facets, modes, mids))
 
     def sync_ghost_states(self) -> None:
         """Owners decide; ghosts copy (states live on facets shared by two ranks)."""
-        tdim = self.mesh.topology.dim
-        imap = self.mesh.topology.index_map(tdim - 1)
-        vec = dolfinx.la.vector(imap, 2, dtype=np.float64)
-        arr = vec.array.reshape(-1, 2)
-        arr[:] = -1.0
-        arr[self.facets, 0] = self.state
-        arr[self.facets, 1] = self.contact
-        vec.scatter_forward()
-        self.state[:] = arr[self.facets, 0].astype(np.int8)
-        self.contact[:] = arr[self.facets, 1].astype(np.int8)
+        imap = self.mesh.topology.index_map(self.mesh.topology.dim - 1)
+        self.states.sync_ghosts(imap, self.facets)
 
     def equilibrate(self, loads: Loads, max_iterations: int = 200, load_factor: float = 0.0) -> int:
         """Solve, then break overstressed facets and switch contacts until nothing changes.
@@ -734,58 +525,19 @@ class CDEMSolid:
     def _critical_factor(
         self, base: Loads, unit: Loads, lam0: float, lam1: float, samples: int
     ) -> np.ndarray:
-        """Smallest factor in (lam0, lam1] at which each intact owned facet fails.
-
-        Jumps are linear in the factor, so every facet's failure ratio is a cheap
-        function of it: sample, then bisect each bracket (all facets at once).
-        """
+        """Smallest factor in (lam0, lam1] at which each intact owned facet fails."""
         intact = (self.state == FacetState.INTACT) & self.owned
-        jbs = [self._jumps(self.u, pts)[intact] for pts in self.strength_points]
-        jus = [self._jumps(self._u_unit, pts)[intact] for pts in self.strength_points]
-        n, kn, ks = self.normals[intact], self.kn[intact], self.ks[intact]
-        t0s, c0s = self.t0[intact], self.c0[intact]
-        fb, fu = base.in_situ_factor, unit.in_situ_factor
-        s0n = np.einsum("ij,fj->fi", self.sigma0, n)
-        mu = self.model.friction
-
-        def ratio(lam: np.ndarray, sel: np.ndarray) -> np.ndarray:
-            """Failure ratio of the facets ``sel``, each at its own factor ``lam``."""
-            ns = n[sel]
-            t0 = s0n[sel] * (fb + lam * fu)[:, None]
-            t0n = np.einsum("fi,fi->f", t0, ns)
-            worst = np.zeros(len(lam))
-            for jb, ju in zip(jbs, jus, strict=True):
-                jump = jb[sel] + lam[:, None] * ju[sel]
-                jn = np.einsum("fi,fi->f", jump, ns)
-                tn = t0n - kn[sel] * jn
-                jt = jump - jn[:, None] * ns
-                tau = np.linalg.norm((t0 - t0n[:, None] * ns) - ks[sel][:, None] * jt, axis=1)
-                worst = np.maximum(worst, check_failure(tn, tau, t0s[sel], c0s[sel], mu).ratio)
-            return worst
-
-        count = len(n)
-        lo = np.full(count, lam0)
-        hi = np.full(count, np.inf)
-        # sample: bracket each facet's first failure, looking only at unbracketed ones
-        for lam in np.linspace(lam0, lam1, samples + 1)[1:]:
-            sel = np.flatnonzero(~np.isfinite(hi))
-            if len(sel) == 0:
-                break
-            failed = ratio(np.full(len(sel), lam), sel) >= 1.0
-            hi[sel[failed]] = lam
-            lo[sel[~failed]] = lam
-        # bisect every bracket at once
-        todo = np.flatnonzero(np.isfinite(hi))
-        a, b = lo[todo], hi[todo]
-        if len(todo):
-            for _ in range(60):
-                mid = 0.5 * (a + b)
-                over = ratio(mid, todo) >= 1.0
-                b = np.where(over, mid, b)
-                a = np.where(over, a, mid)
-        crit = np.full(count, np.inf)
-        crit[todo] = b
-        return crit
+        n = self.normals[intact]
+        return critical_factors(
+            [self._jumps(self.u, pts)[intact] for pts in self.strength_points],
+            [self._jumps(self._u_unit, pts)[intact] for pts in self.strength_points],
+            n,
+            np.einsum("ij,fj->fi", self.sigma0, n),
+            (base.in_situ_factor, unit.in_situ_factor),
+            (self.kn[intact], self.ks[intact]),
+            (self.t0[intact], self.c0[intact], self.model.friction),
+            (lam0, lam1, samples),
+        )
 
     # ---------------------------------------------------------------- results
 
@@ -822,22 +574,15 @@ class CDEMSolid:
         return ufl.as_matrix(self.sigma0.tolist()) + stress(self.u, self.material)
 
 
-def combine(base: Loads, unit: Loads, lam: float) -> Loads:
-    """Return ``base + lam * unit`` (cavity pressures, crack pressure, in-situ factor)."""
-    cavity = dict(base.cavity)
-    for name, p in unit.cavity.items():
-        cavity[name] = cavity.get(name, 0.0) + lam * p
-    return Loads(
-        cavity=cavity,
-        crack_pressure=np.asarray(base.crack_pressure) + lam * np.asarray(unit.crack_pressure)
-        if not (np.isscalar(base.crack_pressure) and np.isscalar(unit.crack_pressure))
-        else float(base.crack_pressure) + lam * float(unit.crack_pressure),  # type: ignore[arg-type]
-        in_situ_factor=base.in_situ_factor + lam * unit.in_situ_factor,
-    )
-
-
 __all__ = [
     "AUTO_DIRECT_MAX_DOFS",
+    "GLUE",
+    "OPEN",
+    "OPEN_FACETS",
+    "SLIP",
+    "SLIP_FACETS",
+    "SPRING",
+    "STICK",
     "BreakEvent",
     "CDEMSolid",
     "InterfaceSnapshot",

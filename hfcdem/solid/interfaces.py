@@ -189,12 +189,77 @@ def select_breaking(
     return np.array([c[-1] for c in chosen if c[-2] == comm.rank], dtype=np.int64)
 
 
+def critical_factors(
+    base_jumps: list[np.ndarray],
+    unit_jumps: list[np.ndarray],
+    normals: np.ndarray,
+    in_situ_traction: np.ndarray,
+    in_situ_factors: tuple[float, float],
+    stiffness: tuple[np.ndarray, np.ndarray],
+    strength: tuple[np.ndarray, np.ndarray, float],
+    bracket: tuple[float, float, int],
+) -> np.ndarray:
+    """Smallest load factor in ``(lam0, lam1]`` at which each facet fails (inf: none).
+
+    The jump at every strength point is ``base + lam unit`` (one array per point),
+    the in-situ traction ``sigma0 n`` scales by ``fb + lam fu``, so every facet's
+    failure ratio is a cheap function of ``lam``: sample ``samples`` levels, then
+    bisect each bracket (all facets at once).  ``stiffness`` is (kn, ks),
+    ``strength`` (T0, C0, friction), ``bracket`` (lam0, lam1, samples).
+    """
+    n, s0n = normals, in_situ_traction
+    fb, fu = in_situ_factors
+    kn, ks = stiffness
+    t0s, c0s, mu = strength
+    lam0, lam1, samples = bracket
+
+    def ratio(lam: np.ndarray, sel: np.ndarray) -> np.ndarray:
+        """Failure ratio of the facets ``sel``, each at its own factor ``lam``."""
+        ns = n[sel]
+        t0 = s0n[sel] * (fb + lam * fu)[:, None]
+        t0n = np.einsum("fi,fi->f", t0, ns)
+        worst = np.zeros(len(lam))
+        for jb, ju in zip(base_jumps, unit_jumps, strict=True):
+            jump = jb[sel] + lam[:, None] * ju[sel]
+            jn = np.einsum("fi,fi->f", jump, ns)
+            tn = t0n - kn[sel] * jn
+            jt = jump - jn[:, None] * ns
+            tau = np.linalg.norm((t0 - t0n[:, None] * ns) - ks[sel][:, None] * jt, axis=1)
+            worst = np.maximum(worst, check_failure(tn, tau, t0s[sel], c0s[sel], mu).ratio)
+        return worst
+
+    count = len(n)
+    lo = np.full(count, lam0)
+    hi = np.full(count, np.inf)
+    # sample: bracket each facet's first failure, looking only at unbracketed ones
+    for lam in np.linspace(lam0, lam1, samples + 1)[1:]:
+        sel = np.flatnonzero(~np.isfinite(hi))
+        if len(sel) == 0:
+            break
+        failed = ratio(np.full(len(sel), lam), sel) >= 1.0
+        hi[sel[failed]] = lam
+        lo[sel[~failed]] = lam
+    # bisect every bracket at once
+    todo = np.flatnonzero(np.isfinite(hi))
+    a, b = lo[todo], hi[todo]
+    if len(todo):
+        for _ in range(60):
+            mid = 0.5 * (a + b)
+            over = ratio(mid, todo) >= 1.0
+            b = np.where(over, mid, b)
+            a = np.where(over, a, mid)
+    crit = np.full(count, np.inf)
+    crit[todo] = b
+    return crit
+
+
 __all__ = [
     "BREAK_RULES",
     "FacetState",
     "InterfaceModel",
     "Overstress",
     "check_failure",
+    "critical_factors",
     "select_breaking",
     "stable_facet_hash",
     "weibull_scatter",

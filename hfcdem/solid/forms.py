@@ -1,0 +1,259 @@
+"""The UFL forms of the CDEM solid, its loads and its boundary conditions.
+
+Interior facets are tagged by the integral they carry (:func:`interface_tags`):
+springs while intact or stuck, fluid pressure while open, normal spring and
+friction while sliding, Nitsche glue outside the fracturable zone.  Every number
+enters as a ``Constant`` (or a per-facet Crouzeix-Raviart function), so new
+loads, stiffnesses or states never recompile a form.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import dolfinx
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from hfcdem.mesh.tagged import TaggedMesh
+from hfcdem.solid.elastic import ElasticMaterial, strain, stress
+from hfcdem.solid.facets import FacetFunctions, InterfaceFacets
+from hfcdem.solid.interfaces import FacetState, InterfaceModel
+from hfcdem.solid.states import OPEN, SLIP, InterfaceStates
+
+# interior-facet integral ids
+SPRING = 1  # intact, or broken and closed in stick: kn and ks
+OPEN_FACETS = 2  # broken/pre-existing and open: fluid pressure, no springs
+SLIP_FACETS = 3  # broken, closed, sliding: kn and a friction traction
+GLUE = 4  # outside the zone: Nitsche continuity
+
+
+@dataclass(frozen=True)
+class Loads:
+    """Loads of one solve: in-situ stress plus fluid pressures (Pa).
+
+    ``cavity`` maps exterior facet-group names to pressure; ``crack_pressure``
+    acts on every open broken or pre-existing interface (a number, or one value
+    per local facet of :attr:`CDEMSolid.facets`).  ``joint_pressure`` (one value
+    per local facet) acts inside intact interfaces holding fluid.
+    """
+
+    cavity: Mapping[str, float] = field(default_factory=dict)
+    crack_pressure: float | np.ndarray = 0.0
+    joint_pressure: np.ndarray | None = None
+    in_situ_factor: float = 1.0
+
+
+def combine(base: Loads, unit: Loads, lam: float) -> Loads:
+    """Return ``base + lam * unit`` (cavity pressures, crack pressure, in-situ factor)."""
+    cavity = dict(base.cavity)
+    for name, p in unit.cavity.items():
+        cavity[name] = cavity.get(name, 0.0) + lam * p
+    return Loads(
+        cavity=cavity,
+        crack_pressure=np.asarray(base.crack_pressure) + lam * np.asarray(unit.crack_pressure)
+        if not (np.isscalar(base.crack_pressure) and np.isscalar(unit.crack_pressure))
+        else float(base.crack_pressure) + lam * float(unit.crack_pressure),  # type: ignore[arg-type]
+        in_situ_factor=base.in_situ_factor + lam * unit.in_situ_factor,
+    )
+
+
+def interface_tags(
+    mesh: dolfinx.mesh.Mesh, facets: InterfaceFacets, states: InterfaceStates
+) -> dolfinx.mesh.MeshTags:
+    """Tag interface facets by their integral: SPRING, OPEN_FACETS, SLIP_FACETS or GLUE."""
+    broken = states.state != FacetState.INTACT
+    values = np.full(facets.num_facets, SPRING, dtype=np.int32)
+    values[broken & (states.contact == OPEN)] = OPEN_FACETS
+    values[broken & (states.contact == SLIP)] = SLIP_FACETS
+    glue = facets.glue_facets
+    idx = np.concatenate([facets.facets, glue]).astype(np.int32)
+    vals = np.concatenate([values, np.full(len(glue), GLUE, dtype=np.int32)])
+    order = np.argsort(idx)
+    return dolfinx.mesh.meshtags(mesh, mesh.topology.dim - 1, idx[order], vals[order])
+
+
+class SolidForms:
+    """Stiffness and load forms of the blocks, springs, contacts and glue."""
+
+    def __init__(
+        self,
+        tmesh: TaggedMesh,
+        V: dolfinx.fem.FunctionSpace,
+        material: ElasticMaterial,
+        model: InterfaceModel,
+        sigma0: np.ndarray,
+        nitsche_penalty: float,
+        facet_functions: FacetFunctions,
+    ) -> None:
+        self.tmesh = tmesh
+        self.mesh = mesh = tmesh.mesh
+        self.V = V
+        self.material = material
+        self.sigma0 = sigma0
+        self.facet_functions = facet_functions
+        scalar = dolfinx.default_scalar_type
+        # stiffness factors as Constants: changing alpha or the rock never recompiles
+        self._kn = dolfinx.fem.Constant(mesh, scalar(model.alpha * material.youngs_modulus))
+        self._ratio = dolfinx.fem.Constant(
+            mesh, scalar(model.shear_stiffness_ratio(material.poisson_ratio))
+        )
+        self._residual = dolfinx.fem.Constant(mesh, scalar(model.residual_stiffness))
+        lam2mu = material.lame_lambda + 2.0 * material.shear_modulus
+        self._glue = dolfinx.fem.Constant(mesh, scalar(nitsche_penalty * lam2mu))
+
+    def stiffness(self, dS: ufl.Measure) -> ufl.Form:
+        """Bilinear form: elasticity, springs by state, Nitsche glue (``dS`` tagged)."""
+        mesh, gdim, material = self.mesh, self.mesh.geometry.dim, self.material
+        u, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
+        npl = ufl.FacetNormal(mesh)("+")
+        h = ufl.avg(ufl.CellDiameter(mesh))
+        kn = self._kn / h
+        ks = kn * self._ratio
+        eye = ufl.Identity(gdim)
+        Pn = ufl.outer(npl, npl)
+        K = kn * Pn + ks * (eye - Pn)
+        ju, jv = ufl.jump(u), ufl.jump(v)
+
+        a = ufl.inner(stress(u, material), strain(v)) * ufl.dx
+        a += ufl.inner(K * ju, jv) * dS(SPRING)
+        a += ufl.inner(kn * Pn * ju, jv) * dS(SLIP_FACETS)
+        # a residual spring on open and sliding faces keeps detached blocks attached
+        a += self._residual * ufl.inner(K * ju, jv) * dS(OPEN_FACETS)
+        a += self._residual * ks * ufl.inner((eye - Pn) * ju, jv) * dS(SLIP_FACETS)
+        # Nitsche glue outside the zone (symmetric interior penalty)
+        a += (
+            -ufl.inner(ufl.avg(stress(u, material)) * npl, jv)
+            - ufl.inner(ufl.avg(stress(v, material)) * npl, ju)
+            + self._glue / h * ufl.inner(ju, jv)
+        ) * dS(GLUE)
+        return a
+
+    def load(self, loads: Loads, states: InterfaceStates, dS: ufl.Measure) -> ufl.Form:
+        """Linear form of ``loads`` at ``states`` (collective: facet functions)."""
+        mesh, gdim = self.mesh, self.mesh.geometry.dim
+        comm = mesh.comm
+        scalar = dolfinx.default_scalar_type
+        v, n = ufl.TestFunction(self.V), ufl.FacetNormal(mesh)
+        facet_function = self.facet_functions.function
+
+        def const(value: float | np.ndarray) -> dolfinx.fem.Constant:
+            return dolfinx.fem.Constant(mesh, np.asarray(value, dtype=scalar))
+
+        sigma0 = const(loads.in_situ_factor * self.sigma0)
+        eye = ufl.Identity(gdim)
+        L = ufl.inner(const(np.zeros(gdim)), v) * ufl.dx
+        for name, p in loads.cavity.items():
+            if not math.isfinite(p):
+                raise ValueError(f"cavity pressure on {name!r} must be finite, got {p!r}")
+            L += -ufl.inner((const(p) * eye + sigma0) * n, v) * self.tmesh.ds(name)
+        npl = n("+")
+        if np.isscalar(loads.crack_pressure):
+            p_crack = const(float(loads.crack_pressure))  # type: ignore[arg-type]
+            L += -ufl.inner((p_crack * eye + sigma0) * npl, ufl.jump(v)) * dS(OPEN_FACETS)
+        else:
+            pf = facet_function(np.asarray(loads.crack_pressure))
+            L += -ufl.inner((pf("+") * eye + sigma0) * npl, ufl.jump(v)) * dS(
+                OPEN_FACETS, metadata={"quadrature_degree": 1}
+            )
+        has_joints = loads.joint_pressure is not None and bool(np.any(loads.joint_pressure))
+        if comm.allreduce(has_joints, op=MPI.LOR):  # collective, as below
+            jf = facet_function(
+                np.zeros(len(states.state))
+                if loads.joint_pressure is None
+                else np.asarray(loads.joint_pressure)
+            )
+            L += -ufl.inner(jf("+") * npl, ufl.jump(v)) * dS(
+                SPRING, metadata={"quadrature_degree": 1}
+            )
+        # collective decision: building the facet function is collective
+        any_slip = comm.allreduce(bool(np.any(states.contact == SLIP)), op=MPI.LOR)
+        if any_slip and loads.in_situ_factor != 0.0:
+            # friction minus in-situ shear on sliding faces, per facet (+ side); a unit
+            # load (no in-situ part) is the linearisation about the current slip set
+            tf = facet_function(states.friction_traction, (gdim,))
+            tau0 = sigma0 * npl - ufl.inner(sigma0 * npl, npl) * npl
+            L += ufl.inner(tf("+") - tau0, ufl.jump(v)) * dS(
+                SLIP_FACETS, metadata={"quadrature_degree": 1}
+            )
+        return L
+
+
+def dg_boundary_conditions(
+    V: dolfinx.fem.FunctionSpace,
+    tmesh: TaggedMesh,
+    degree: int,
+    rollers: Mapping[str, int],
+    fixed: Sequence[str],
+) -> list[dolfinx.fem.DirichletBC]:
+    """Dirichlet conditions on DG dofs that lie on the named boundary facets.
+
+    ``rollers`` hold one displacement component of a group at zero, ``fixed``
+    every component.
+    """
+    import basix
+
+    mesh, tdim, gdim = tmesh.mesh, tmesh.mesh.topology.dim, tmesh.mesh.geometry.dim
+    cg = basix.create_element(
+        basix.ElementFamily.P, mesh.basix_cell(), degree, basix.LagrangeVariant.gll_warped
+    )
+    closure = cg.entity_closure_dofs[tdim - 1]
+    c2f = mesh.topology.connectivity(tdim, tdim - 1)
+    f2c = mesh.topology.connectivity(tdim - 1, tdim)
+    bcs = []
+    items = [(name, comp) for name, comp in rollers.items()]
+    items += [(name, c) for name in fixed for c in range(gdim)]
+    for name, comp in items:
+        if not 0 <= comp < gdim:
+            raise ValueError(f"roller component for {name!r} must be in [0, {gdim})")
+        sub = V.sub(comp)
+        dofs = []
+        for f in tmesh.facets(name):
+            for c in f2c.links(f):
+                local = int(np.flatnonzero(c2f.links(c) == f)[0])
+                cell_dofs = sub.dofmap.cell_dofs(c)
+                dofs.extend(cell_dofs[closure[local]])
+        dofs_arr = np.unique(np.asarray(dofs, dtype=np.int32))
+        bcs.append(dolfinx.fem.dirichletbc(dolfinx.default_scalar_type(0.0), dofs_arr, sub))
+    return bcs
+
+
+def rigid_body_modes(V: dolfinx.fem.FunctionSpace) -> tuple[PETSc.NullSpace, list]:
+    """Rigid-body modes of a vector DG space, for algebraic multigrid.
+
+    Returns the near-null space and its vectors: PETSc keeps references to the
+    vectors only, so the caller must keep them alive.
+    """
+    x = V.tabulate_dof_coordinates()
+    gdim = V.mesh.geometry.dim
+    modes = [dolfinx.la.vector(V.dofmap.index_map, gdim) for _ in range(3 if gdim == 2 else 6)]
+    arrays = [m.array.reshape(-1, gdim) for m in modes]
+    for k in range(gdim):
+        arrays[k][:, k] = 1.0
+    if gdim == 2:
+        arrays[2][:, 0], arrays[2][:, 1] = -x[:, 1], x[:, 0]
+    else:
+        arrays[3][:, 0], arrays[3][:, 1] = -x[:, 1], x[:, 0]
+        arrays[4][:, 0], arrays[4][:, 2] = x[:, 2], -x[:, 0]
+        arrays[5][:, 2], arrays[5][:, 1] = x[:, 1], -x[:, 2]
+    dolfinx.la.orthonormalize(modes)
+    space = PETSc.NullSpace().create(vectors=[m.petsc_vec for m in modes], comm=V.mesh.comm)
+    return space, modes
+
+
+__all__ = [
+    "GLUE",
+    "OPEN_FACETS",
+    "SLIP_FACETS",
+    "SPRING",
+    "Loads",
+    "SolidForms",
+    "combine",
+    "dg_boundary_conditions",
+    "interface_tags",
+    "rigid_body_modes",
+]

@@ -1,0 +1,106 @@
+"""The state of every interface facet: failure, contact and friction.
+
+``state`` is the failure state (0 intact, 1 tensile, 2 shear, as
+:class:`~hfcdem.solid.interfaces.FacetState`); ``contact`` the contact sub-state
+of a broken facet (open, stick, slip); ``friction_traction`` the Coulomb traction
+of a sliding facet on its ``+`` face.  Owners decide; ghosts copy.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import dolfinx
+import numpy as np
+
+from hfcdem.solid.interfaces import FacetState
+
+# contact sub-states of broken facets
+OPEN, STICK, SLIP = 0, 1, 2
+
+
+@dataclass(eq=False)
+class InterfaceStates:
+    """Failure state, contact sub-state and friction traction per interface facet."""
+
+    state: np.ndarray  # (F,) int8 FacetState
+    contact: np.ndarray  # (F,) int8 OPEN, STICK or SLIP
+    friction_traction: np.ndarray  # (F, gdim) Pa, on the + face of sliding facets
+
+    def __post_init__(self) -> None:
+        if not len(self.state) == len(self.contact) == len(self.friction_traction):
+            raise ValueError("state, contact and friction_traction need one row per facet")
+
+    @classmethod
+    def initial(cls, is_crack: np.ndarray, gdim: int) -> InterfaceStates:
+        """Pre-existing cracks broken and open; every other facet intact and stuck."""
+        count = len(is_crack)
+        state = np.where(is_crack, FacetState.TENSILE, FacetState.INTACT).astype(np.int8)
+        contact = np.full(count, OPEN, dtype=np.int8)
+        contact[~is_crack] = STICK
+        return cls(state, contact, np.zeros((count, gdim)))
+
+    def copy(self) -> InterfaceStates:
+        """Return an independent copy (to restore after a rejected attempt)."""
+        return InterfaceStates(
+            self.state.copy(), self.contact.copy(), self.friction_traction.copy()
+        )
+
+    def restore(self, saved: InterfaceStates) -> None:
+        """Take the values of ``saved`` in place (arrays handed out stay valid)."""
+        self.state[:] = saved.state
+        self.contact[:] = saved.contact
+        self.friction_traction[:] = saved.friction_traction
+
+    def break_facets(self, facets: np.ndarray, modes: np.ndarray) -> None:
+        """Break ``facets`` in ``modes``: tensile breaks start open, shear breaks closed."""
+        self.state[facets] = modes
+        self.contact[facets] = np.where(modes == FacetState.TENSILE, OPEN, STICK)
+
+    def switch_contacts(
+        self,
+        broken: np.ndarray,
+        normal_traction: np.ndarray,
+        shear_vector: np.ndarray,
+        pressure: np.ndarray,
+        closing: np.ndarray,
+        friction: float,
+    ) -> None:
+        """Open, close, stick or slip the ``broken`` facets (pure NumPy).
+
+        ``normal_traction`` and ``shear_vector`` are the tractions at the current
+        states, ``pressure`` the fluid pressure per facet, ``closing`` the open
+        facets whose faces interpenetrate.
+        """
+        old = self.contact.copy()
+        # closed facets open when their normal traction exceeds the fluid pressure
+        closed = broken & (self.contact != OPEN)
+        self.contact[closed & (normal_traction > -pressure)] = OPEN
+        # open facets close when the faces interpenetrate
+        self.contact[broken & (old == OPEN) & closing] = STICK
+        # stick/slip by Coulomb on closed facets
+        closed = broken & (self.contact != OPEN)
+        limit = friction * np.maximum(-normal_traction, 0.0)
+        mag = np.linalg.norm(shear_vector, axis=1)
+        sliding = closed & (mag > limit * (1.0 + 1e-9))
+        self.contact[closed & ~sliding & (old != SLIP)] = STICK
+        self.contact[sliding] = SLIP
+        with np.errstate(invalid="ignore", divide="ignore"):
+            direction = np.where(mag[:, None] > 0.0, shear_vector / mag[:, None], 0.0)
+        self.friction_traction = np.where(
+            (self.contact == SLIP)[:, None], direction * limit[:, None], 0.0
+        )
+
+    def sync_ghosts(self, imap: dolfinx.common.IndexMap, facets: np.ndarray) -> None:
+        """Copy the owners' state and contact to the ghosts of ``facets`` (collective)."""
+        vec = dolfinx.la.vector(imap, 2, dtype=np.float64)
+        arr = vec.array.reshape(-1, 2)
+        arr[:] = -1.0
+        arr[facets, 0] = self.state
+        arr[facets, 1] = self.contact
+        vec.scatter_forward()
+        self.state[:] = arr[facets, 0].astype(np.int8)
+        self.contact[:] = arr[facets, 1].astype(np.int8)
+
+
+__all__ = ["OPEN", "SLIP", "STICK", "InterfaceStates"]
