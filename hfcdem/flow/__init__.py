@@ -2,7 +2,8 @@
 
 ``fluid`` holds :class:`Fluid`, :class:`Injection` and Carter leak-off;
 ``network`` turns broken facets into finite-volume cells joined at shared
-edges (3D) or vertices (2D) for the cubic law.
+edges (3D) or vertices (2D) for the cubic law; ``balance`` is the mass balance
+of the pressure groups on it (plain NumPy) and ``newton`` solves it (SNES).
 """
 
 __all__: list[str] = []
