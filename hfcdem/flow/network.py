@@ -125,6 +125,35 @@ def gather_rows(comm: MPI.Comm, rows: np.ndarray) -> np.ndarray:
     return np.concatenate(parts, axis=0)
 
 
+def _pairs(
+    e_star: list[int], e_fac: list[int], star_cavity: list[bool], num_facets: int
+) -> tuple[list[int], list[int], list[int], np.ndarray]:
+    """Connect the entries of each star (a shared vertex or edge) to each other.
+
+    A star on the cavity wall joins each entry to the cavity; any other joins
+    every pair of its entries (a junction as a zero-volume node).
+    """
+    members: list[list[int]] = [[] for _ in star_cavity]
+    for e, s in enumerate(e_star):
+        members[s].append(e)
+    pa, pb, ps = [], [], []
+    touches = np.zeros(num_facets, dtype=bool)
+    for s, mem in enumerate(members):
+        if star_cavity[s]:
+            for e in mem:
+                pa.append(e)
+                pb.append(CAVITY)
+                ps.append(s)
+                touches[e_fac[e]] = True
+        else:
+            for i in range(len(mem)):
+                for j in range(i + 1, len(mem)):
+                    pa.append(mem[i])
+                    pb.append(mem[j])
+                    ps.append(s)
+    return pa, pb, ps, touches
+
+
 def build_network(
     comm: MPI.Comm,
     keys: np.ndarray,
@@ -180,24 +209,7 @@ def build_network(
             e_geom.append(star_cross[s] / dist)
     entry_facet = np.asarray(e_fac, dtype=np.int64)
     entry_star = np.asarray(e_star, dtype=np.int64)
-    members: list[list[int]] = [[] for _ in star_point]
-    for e, s in enumerate(e_star):
-        members[s].append(e)
-    pa, pb, ps = [], [], []
-    touches = np.zeros(len(all_keys), dtype=bool)
-    for s, mem in enumerate(members):
-        if star_cavity[s]:
-            for e in mem:
-                pa.append(e)
-                pb.append(CAVITY)
-                ps.append(s)
-                touches[e_fac[e]] = True
-        else:
-            for i in range(len(mem)):
-                for j in range(i + 1, len(mem)):
-                    pa.append(mem[i])
-                    pb.append(mem[j])
-                    ps.append(s)
+    pa, pb, ps, touches = _pairs(e_star, e_fac, star_cavity, len(all_keys))
     net = Network(
         keys=all_keys,
         area=all_area,
