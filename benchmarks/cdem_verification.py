@@ -25,6 +25,7 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
 from hfcdem.io.sampling import evaluate_at_points
 from hfcdem.mesh.verification import (
     BoreholePlate,
@@ -35,8 +36,6 @@ from hfcdem.mesh.verification import (
     create_penny_block,
 )
 from hfcdem.solid.cdem import CDEMSolid, Loads
-from hfcdem.solid.elastic import ElasticMaterial, InSituStress
-from hfcdem.solid.interfaces import InterfaceModel
 
 MPa = 1e6
 E, NU, P, A = 210e9, 0.25, 22e6, 0.1

@@ -22,12 +22,10 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
+from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
-from hfcdem.flow.fluid import Fluid, Injection
 from hfcdem.mesh.verification import PathPlate, create_path_plate
 from hfcdem.solid.cdem import CDEMSolid
-from hfcdem.solid.elastic import ElasticMaterial, InSituStress
-from hfcdem.solid.interfaces import InterfaceModel
 
 ROCK = ElasticMaterial(25e9, 0.25)
 Q0 = 4e-3

@@ -16,12 +16,10 @@ import time
 import numpy as np
 from mpi4py import MPI
 
+from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
-from hfcdem.flow.fluid import Fluid, Injection
 from hfcdem.mesh.verification import BoreholePlate, create_borehole_plate
 from hfcdem.solid.cdem import CDEMSolid
-from hfcdem.solid.elastic import ElasticMaterial, InSituStress
-from hfcdem.solid.interfaces import InterfaceModel
 
 A, SH, T0 = 0.03, 20e6, 5e6
 

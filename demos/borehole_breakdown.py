@@ -31,14 +31,14 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
 from hfcdem.info import versions
 from hfcdem.io.files import prepare_output_dir, write_json, write_solid_results
 from hfcdem.io.plots import plot_interface_states, render_field
 from hfcdem.io.sampling import interpolate_expression
 from hfcdem.mesh.verification import BoreholePlate, create_borehole_plate
 from hfcdem.solid.cdem import CDEMSolid, Loads
-from hfcdem.solid.elastic import ElasticMaterial, InSituStress
-from hfcdem.solid.interfaces import FacetState, InterfaceModel
+from hfcdem.solid.interfaces import FacetState
 
 MPa = 1e6
 

@@ -29,12 +29,13 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.config.materials import ElasticMaterial, InSituStress
 from hfcdem.info import versions
 from hfcdem.io.files import prepare_output_dir, write_csv, write_fields, write_json
 from hfcdem.io.plots import plot_lines, render_field
 from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
 from hfcdem.mesh.verification import BoreholePlate, create_borehole_plate
-from hfcdem.solid.elastic import ElasticMaterial, InSituStress, solve_cavity_pressure
+from hfcdem.solid.elastic import solve_cavity_pressure
 
 MPa = 1e6
 

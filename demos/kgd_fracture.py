@@ -28,14 +28,12 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
+from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
-from hfcdem.flow.fluid import Fluid, Injection
 from hfcdem.info import versions
 from hfcdem.io.files import prepare_output_dir, write_interfaces, write_json
 from hfcdem.mesh.verification import PathPlate, create_path_plate
 from hfcdem.solid.cdem import CDEMSolid
-from hfcdem.solid.elastic import ElasticMaterial, InSituStress
-from hfcdem.solid.interfaces import InterfaceModel
 
 # seed 000, section 4.2: rock, water and the pump (per metre of fracture height)
 ROCK = ElasticMaterial(youngs_modulus=25e9, poisson_ratio=0.25)

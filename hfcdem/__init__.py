@@ -38,12 +38,12 @@ _API = {
     # solid: blocks and interface springs
     "CDEMSolid": "hfcdem.solid.cdem",
     "Loads": "hfcdem.solid.cdem",
-    "InterfaceModel": "hfcdem.solid.interfaces",
-    "ElasticMaterial": "hfcdem.solid.elastic",
-    "InSituStress": "hfcdem.solid.elastic",
+    "InterfaceModel": "hfcdem.config.materials",
+    "ElasticMaterial": "hfcdem.config.materials",
+    "InSituStress": "hfcdem.config.materials",
     # flow and coupling: the fluid in the fractures
-    "Fluid": "hfcdem.flow.fluid",
-    "Injection": "hfcdem.flow.fluid",
+    "Fluid": "hfcdem.config.materials",
+    "Injection": "hfcdem.config.materials",
     "CarterLeakOff": "hfcdem.flow.fluid",
     "HydraulicFracture": "hfcdem.coupling.hydrofrac",
     "FlowSettings": "hfcdem.coupling.hydrofrac",

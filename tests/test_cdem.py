@@ -10,6 +10,7 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
 from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
 from hfcdem.mesh.verification import (
     BoreholePlate,
@@ -20,8 +21,7 @@ from hfcdem.mesh.verification import (
     create_penny_block,
 )
 from hfcdem.solid.cdem import CDEMSolid, Loads
-from hfcdem.solid.elastic import ElasticMaterial, InSituStress
-from hfcdem.solid.interfaces import FacetState, InterfaceModel
+from hfcdem.solid.interfaces import FacetState
 
 MPa = 1e6
 E, NU, P, A = 210e9, 0.25, 22e6, 0.1  # Table 1 of the perforation paper

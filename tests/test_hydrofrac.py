@@ -11,8 +11,9 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
+from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
-from hfcdem.flow.fluid import CarterLeakOff, Fluid, Injection
+from hfcdem.flow.fluid import CarterLeakOff
 from hfcdem.mesh.verification import (
     BoreholePlate,
     PathPlate,
@@ -20,8 +21,6 @@ from hfcdem.mesh.verification import (
     create_path_plate,
 )
 from hfcdem.solid.cdem import CDEMSolid
-from hfcdem.solid.elastic import ElasticMaterial, InSituStress
-from hfcdem.solid.interfaces import InterfaceModel
 from hfcdem.workflows.breakdown import detect_breakdown
 
 # seed 000 section 4.2: E 25 GPa, nu 0.25, water, Q0 = 4 kg/s per metre (half model: 2)

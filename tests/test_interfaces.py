@@ -8,7 +8,6 @@ from mpi4py import MPI
 
 from hfcdem.solid.interfaces import (
     FacetState,
-    InterfaceModel,
     check_failure,
     select_breaking,
     stable_facet_hash,
@@ -60,24 +59,6 @@ def test_weibull_scatter_keeps_the_mean_and_narrows_with_modulus():
     assert wide.mean() == pytest.approx(3e6, rel=0.02)
     assert narrow.mean() == pytest.approx(3e6, rel=0.02)
     assert narrow.std() < wide.std() / 5
-
-
-@pytest.mark.parametrize(
-    ("kwargs", "field"),
-    [
-        ({"alpha": 0.0}, "alpha"),
-        ({"tensile_strength": -1.0}, "tensile_strength"),
-        ({"cohesion": float("nan")}, "cohesion"),
-        ({"friction_angle": 90.0}, "friction_angle"),
-        ({"weibull_modulus": 0.0}, "weibull_modulus"),
-        ({"break_rule": "some"}, "break_rule"),
-        ({"max_breaks": 0}, "max_breaks"),
-        ({"residual_stiffness": 1.0}, "residual_stiffness"),
-    ],
-)
-def test_interface_model_validation_names_the_field(kwargs, field):
-    with pytest.raises(ValueError, match=field):
-        InterfaceModel(**kwargs)
 
 
 def test_break_rules_pick_the_same_facets_on_any_rank_count():

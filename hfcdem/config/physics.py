@@ -67,11 +67,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
 from hfcdem.config.tables import SceneError, TomlTable
 from hfcdem.config.units import parse_quantity
-from hfcdem.flow.fluid import Fluid, Injection
-from hfcdem.solid.elastic import ElasticMaterial, InSituStress
-from hfcdem.solid.interfaces import InterfaceModel
 
 
 def field_default(cls: type, name: str) -> Any:

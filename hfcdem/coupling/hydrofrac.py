@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
+from hfcdem.config.materials import Fluid, Injection
 from hfcdem.coupling.condense import (
     CondensedSolid,
     NetworkView,
@@ -55,7 +56,6 @@ from hfcdem.coupling.condense import (
 from hfcdem.coupling.settings import FlowSettings
 from hfcdem.coupling.stepping import StepController
 from hfcdem.flow.balance import GroupBalance, VoidVolumes, gravity_drive, relative_permeability
-from hfcdem.flow.fluid import Fluid, Injection
 from hfcdem.flow.network import Network, build_network
 from hfcdem.flow.newton import solve_groups
 from hfcdem.io.files import write_csv

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hfcdem.flow.fluid import Fluid
+from hfcdem.config.materials import Fluid
 from hfcdem.flow.network import Network
 
 #: a floor on storage and aperture keeps a closed, dry facet's equations regular (m)

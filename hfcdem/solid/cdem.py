@@ -35,8 +35,9 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
 from hfcdem.mesh.tagged import TaggedMesh
-from hfcdem.solid.elastic import ElasticMaterial, InSituStress, stress
+from hfcdem.solid.elastic import stress
 from hfcdem.solid.facets import FacetFunctions, InterfaceFacets, ZoneMarker
 from hfcdem.solid.forms import (
     GLUE,
@@ -52,7 +53,6 @@ from hfcdem.solid.forms import (
 )
 from hfcdem.solid.interfaces import (
     FacetState,
-    InterfaceModel,
     check_failure,
     critical_factors,
     select_breaking,

@@ -26,78 +26,9 @@ import numpy as np
 import ufl
 from petsc4py import PETSc
 
+from hfcdem.config.materials import ElasticMaterial, InSituStress
 from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solvers import DIRECT_LU, check_ksp, create_ksp
-
-
-def _check_positive(name: str, value: float, unit: str, upper: float = math.inf) -> None:
-    if not (isinstance(value, int | float) and math.isfinite(value) and 0.0 < value < upper):
-        raise ValueError(f"{name} must be in (0, {upper:g}) {unit}, got {value!r}")
-
-
-@dataclass(frozen=True)
-class ElasticMaterial:
-    """Isotropic linear elastic rock (Pa, -)."""
-
-    youngs_modulus: float
-    poisson_ratio: float
-
-    def __post_init__(self) -> None:
-        # 1e13 Pa is ten times diamond: anything above is a unit slip
-        _check_positive("youngs_modulus", self.youngs_modulus, "Pa", 1e13)
-        if not (math.isfinite(self.poisson_ratio) and -1.0 < self.poisson_ratio < 0.5):
-            raise ValueError(f"poisson_ratio must be in (-1, 0.5), got {self.poisson_ratio!r}")
-
-    @property
-    def shear_modulus(self) -> float:
-        """Lame's mu."""
-        return self.youngs_modulus / (2.0 * (1.0 + self.poisson_ratio))
-
-    @property
-    def lame_lambda(self) -> float:
-        """Lame's lambda (plane strain and 3D)."""
-        e, nu = self.youngs_modulus, self.poisson_ratio
-        return e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
-
-
-@dataclass(frozen=True)
-class InSituStress:
-    """Principal in-situ stresses, compression positive, in Pa.
-
-    SH acts along ``azimuth_sh`` (degrees from the x axis, in the x-y plane), Sh
-    perpendicular to it in that plane, Sv along z (3D only).
-    """
-
-    sh_max: float
-    sh_min: float
-    sv: float = 0.0
-    azimuth_sh: float = 0.0
-
-    def __post_init__(self) -> None:
-        for key in ("sh_max", "sh_min", "sv", "azimuth_sh"):
-            value = getattr(self, key)
-            if not math.isfinite(value):
-                raise ValueError(f"{key} must be finite, got {value!r}")
-        for key in ("sh_max", "sh_min", "sv"):
-            if abs(getattr(self, key)) > 1e10:
-                raise ValueError(
-                    f"{key} must be a stress in Pa below 10 GPa, got {getattr(self, key)!r}"
-                )
-        if self.sh_max < self.sh_min:
-            raise ValueError(f"sh_max ({self.sh_max} Pa) must be >= sh_min ({self.sh_min} Pa)")
-
-    def tensor(self, gdim: int) -> np.ndarray:
-        """Return the in-situ stress as a tension-positive ``gdim x gdim`` tensor."""
-        b = math.radians(self.azimuth_sh)
-        c, s = math.cos(b), math.sin(b)
-        rot = np.array([[c, -s], [s, c]])
-        plane = rot @ np.diag([self.sh_max, self.sh_min]) @ rot.T
-        if gdim == 2:
-            return -plane
-        full = np.zeros((3, 3))
-        full[:2, :2] = plane
-        full[2, 2] = self.sv
-        return -full
 
 
 def strain(u: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
@@ -216,9 +147,7 @@ def solve_linear(
 
 
 __all__ = [
-    "ElasticMaterial",
     "ElasticSolution",
-    "InSituStress",
     "solve_cavity_pressure",
     "solve_linear",
     "strain",

@@ -19,10 +19,11 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from hfcdem.config.materials import ElasticMaterial, InterfaceModel
 from hfcdem.mesh.tagged import TaggedMesh
-from hfcdem.solid.elastic import ElasticMaterial, strain, stress
+from hfcdem.solid.elastic import strain, stress
 from hfcdem.solid.facets import FacetFunctions, InterfaceFacets
-from hfcdem.solid.interfaces import FacetState, InterfaceModel
+from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import OPEN, SLIP, InterfaceStates
 
 # interior-facet integral ids

@@ -30,83 +30,6 @@ class FacetState(IntEnum):
     SHEAR = 2
 
 
-BREAK_RULES = ("all", "most_overstressed", "cap")
-
-
-@dataclass(frozen=True)
-class InterfaceModel:
-    """Spring stiffness, strength and post-failure behaviour of the interfaces.
-
-    - ``alpha``: normal stiffness per area ``kn = alpha E / h`` (h: facet's mean
-      cell diameter); ``shear_ratio`` gives ``ks = shear_ratio * kn`` (default
-      ``1 / (2 (1 + nu))``, the ratio G/E, when None).
-    - ``tensile_strength`` T0 and ``cohesion`` c0 in Pa, ``friction_angle`` phi in
-      degrees: intact interfaces break in tension when ``t_n >= T0`` and in shear
-      when ``|tau| >= c0 + sigma_n tan(phi)`` (sigma_n compression positive).
-      A tensile check wins when both hold.
-    - ``weibull_modulus`` m > 0 scatters T0 and c0 per facet with a Weibull law of
-      the same mean, reproducibly for ``seed`` and independent of the rank count.
-    - ``break_rule``: ``"all"`` breaks every overstressed interface at once,
-      ``"most_overstressed"`` only the worst one and then re-solves,
-      ``"cap"`` the ``max_breaks`` worst ones.
-    - ``residual_stiffness``: open faces keep this fraction of kn and ks, so a
-      block whose every face has broken stays attached (numerically) instead of
-      making the system singular.  Its relative effect on an opening is about
-      ``residual_stiffness * alpha * 4 a / h`` (crack length a): 1e-10 is negligible.
-    """
-
-    alpha: float = 100.0
-    shear_ratio: float | None = None
-    tensile_strength: float = math.inf
-    cohesion: float = math.inf
-    friction_angle: float = 30.0
-    weibull_modulus: float | None = None
-    seed: int = 0
-    break_rule: str = "most_overstressed"
-    max_breaks: int = 1
-    residual_stiffness: float = 1e-10
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.alpha) and 0.0 < self.alpha <= 1e12):
-            raise ValueError(f"alpha must be in (0, 1e12] (kn = alpha E / h), got {self.alpha!r}")
-        if self.shear_ratio is not None and not (
-            math.isfinite(self.shear_ratio) and 0.0 <= self.shear_ratio <= 10.0
-        ):
-            raise ValueError(f"shear_ratio must be in [0, 10], got {self.shear_ratio!r}")
-        for key in ("tensile_strength", "cohesion"):
-            value = getattr(self, key)
-            if math.isnan(value) or value < 0.0 or (math.isfinite(value) and value > 1e10):
-                raise ValueError(f"{key} must be in [0, 1e10] Pa (or inf), got {value!r}")
-        if not (math.isfinite(self.friction_angle) and 0.0 <= self.friction_angle < 90.0):
-            raise ValueError(f"friction_angle must be in [0, 90) deg, got {self.friction_angle!r}")
-        if self.weibull_modulus is not None and not (
-            math.isfinite(self.weibull_modulus) and 0.1 <= self.weibull_modulus <= 1e3
-        ):
-            raise ValueError(
-                f"weibull_modulus must be in [0.1, 1000], got {self.weibull_modulus!r}"
-            )
-        if self.break_rule not in BREAK_RULES:
-            raise ValueError(f"break_rule must be one of {BREAK_RULES}, got {self.break_rule!r}")
-        if self.max_breaks < 1:
-            raise ValueError(f"max_breaks must be >= 1, got {self.max_breaks!r}")
-        if not (math.isfinite(self.residual_stiffness) and 0.0 <= self.residual_stiffness < 1.0):
-            raise ValueError(
-                "residual_stiffness must be in [0, 1) (fraction of kn), "
-                f"got {self.residual_stiffness!r}"
-            )
-
-    @property
-    def friction(self) -> float:
-        """Friction coefficient tan(phi)."""
-        return math.tan(math.radians(self.friction_angle))
-
-    def shear_stiffness_ratio(self, poisson_ratio: float) -> float:
-        """Return ks / kn."""
-        if self.shear_ratio is not None:
-            return self.shear_ratio
-        return 1.0 / (2.0 * (1.0 + poisson_ratio))
-
-
 def stable_facet_hash(vertex_ids: npt.NDArray[np.int64], seed: int) -> npt.NDArray[np.float64]:
     """Uniform numbers in (0, 1) from sorted global vertex ids of each facet (rows).
 
@@ -254,9 +177,7 @@ def critical_factors(
 
 
 __all__ = [
-    "BREAK_RULES",
     "FacetState",
-    "InterfaceModel",
     "Overstress",
     "check_failure",
     "critical_factors",

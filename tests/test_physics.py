@@ -119,10 +119,9 @@ def test_output_section():
 
 def test_every_default_has_one_home():
     # a scene that says nothing gets what the library classes say, field by field
+    from hfcdem.config.materials import Fluid, InterfaceModel
     from hfcdem.config.physics import SolverSettings
     from hfcdem.coupling.hydrofrac import FlowSettings
-    from hfcdem.flow.fluid import Fluid
-    from hfcdem.solid.interfaces import InterfaceModel
 
     solver, flow, model = SolverSettings(), FlowSettings(cavity=("wall",)), InterfaceModel()
     assert solver.fidelity == flow.fidelity
