@@ -54,6 +54,9 @@ class InterfaceFacets:
         ``zone``: the fracturable zone as a cell group, a facet group (a prescribed
         path), a marker of cell midpoints, or None (everywhere).
         """
+        topology, tdim = tmesh.mesh.topology, tmesh.mesh.topology.dim
+        for d0, d1 in ((tdim - 1, tdim), (tdim, tdim - 1), (tdim - 1, 0)):
+            topology.create_connectivity(d0, d1)
         facets, cells, is_crack, glue, owned = _classify(tmesh, zone, cracks)
         return cls(facets, cells, is_crack, glue, owned, *_geometry(tmesh.mesh, facets, cells))
 
