@@ -287,6 +287,29 @@ class CDEMSolid:
             A.setNearNullSpace(space)
         return create_ksp(A, self.prefix, {**defaults, **self.petsc_options}, self.comm)
 
+    @property
+    def bcs(self) -> list[dolfinx.fem.DirichletBC]:
+        """The (homogeneous) Dirichlet conditions on the DG dofs."""
+        return self._bcs
+
+    def assemble_stiffness(self) -> tuple[dolfinx.fem.Form, PETSc.Mat]:
+        """Assemble the stiffness of the current interface states (Dirichlet rows/columns set).
+
+        Returns the compiled form and the matrix; the caller owns (destroys) the matrix.
+        """
+        a_form = dolfinx.fem.form(self.forms.stiffness(self._measure()))
+        A = dolfinx.fem.petsc.assemble_matrix(a_form, bcs=self._bcs)
+        A.assemble()
+        return a_form, A
+
+    def assemble_load(self, a_form: dolfinx.fem.Form, L_form: dolfinx.fem.Form) -> PETSc.Vec:
+        """Assemble the right-hand side of ``L_form`` (lifted and with the Dirichlet values)."""
+        b = dolfinx.fem.petsc.assemble_vector(L_form)
+        dolfinx.fem.petsc.apply_lifting(b, [a_form], bcs=[self._bcs])
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        dolfinx.fem.petsc.set_bc(b, self._bcs)
+        return b
+
     def factorize(self) -> tuple[dolfinx.fem.Form, PETSc.KSP]:
         """Assemble the stiffness of the current interface states; return its form and solver.
 
@@ -294,9 +317,7 @@ class CDEMSolid:
         for any number of right-hand sides.
         """
         t0 = time.perf_counter()
-        a_form = dolfinx.fem.form(self.forms.stiffness(self._measure()))
-        A = dolfinx.fem.petsc.assemble_matrix(a_form, bcs=self._bcs)
-        A.assemble()
+        a_form, A = self.assemble_stiffness()
         if self.solver_kind == "direct":
             # factorised here, with more room if MUMPS's dynamic scheduling needs it
             ksp = setup_factorisation(lambda: self._ksp(A), self.comm)
@@ -315,10 +336,7 @@ class CDEMSolid:
     ) -> None:
         """Solve ``K target = L`` with a factorised ``ksp`` (from :meth:`factorize`)."""
         t0 = time.perf_counter()
-        b = dolfinx.fem.petsc.assemble_vector(L_form)
-        dolfinx.fem.petsc.apply_lifting(b, [a_form], bcs=[self._bcs])
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        dolfinx.fem.petsc.set_bc(b, self._bcs)
+        b = self.assemble_load(a_form, L_form)
         ksp.solve(b, target.x.petsc_vec)
         target.x.scatter_forward()
         b.destroy()
