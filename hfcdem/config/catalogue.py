@@ -330,6 +330,7 @@ _BOREHOLE: dict[str, Any] = {
         "size": "3 mm",
         "size_far": "100 mm",
         "grading": 0.25,
+        "circle_elements": 6,  # no cap on the wall size from the circle: size is the knob
         "wall_rings": 4,
         "size_integration": "exact",
         "resolutions": {"coarse": {"size": "6 mm"}},

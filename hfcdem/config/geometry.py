@@ -487,7 +487,7 @@ class KGDStrip:
         _check_plate_mesh(self, 0.5 * self.crack.length, "half the initial crack")
 
     def _check_path_size(self, half: float, path: float) -> None:
-        """The crack and the path beyond it must be whole numbers of ``mesh.path_size``."""
+        """Refuse a ``mesh.path_size`` that does not split the crack and path into whole facets."""
         step = self.mesh.path_size
         if step is None:
             return
