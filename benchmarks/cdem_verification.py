@@ -25,16 +25,12 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.config.geometry import BoreholeSquare, CrackPlate
 from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
+from hfcdem.config.parts import Crack, MeshSizing, Plate, Wellbore
 from hfcdem.io.sampling import evaluate_at_points
-from hfcdem.mesh.verification import (
-    BoreholePlate,
-    CrackPlate,
-    PennyBlock,
-    create_borehole_plate,
-    create_crack_plate,
-    create_penny_block,
-)
+from hfcdem.mesh.build import mesh_geometry
+from hfcdem.mesh.penny import PennyBlock, create_penny_block
 from hfcdem.solid.cdem import CDEMSolid, Loads
 
 MPa = 1e6
@@ -57,9 +53,24 @@ def opening(solid, point, axis):
     return (evaluate_at_points(solid.u, up) - evaluate_at_points(solid.u, down))[0, axis]
 
 
+def crack_plate(half_width: float, size: float, size_far: float, grading: float = 0.25):
+    """Half plate x >= 0 around a crack of half-length A (the verified sizing)."""
+    sizing = MeshSizing(size, size_far, grading=grading, size_integration="exact")
+    plate = Plate(2 * half_width, 2 * half_width)
+    return CrackPlate(plate, Crack(2 * A), sizing, symmetry=("x",))
+
+
+def borehole_plate(radius: float, size: float) -> BoreholeSquare:
+    """The whole +-40 r plate with four structured rings of ``size`` at the wall."""
+    sizing = MeshSizing(
+        size, 8 * radius, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
+    )
+    return BoreholeSquare(Plate(80 * radius, 80 * radius), Wellbore(2 * radius, "z"), sizing)
+
+
 def sneddon(plate, zone=no_zone, alpha=100.0, degree=2):
     t0 = time.perf_counter()
-    tmesh = create_crack_plate(plate)
+    tmesh = mesh_geometry(plate)
     solid = CDEMSolid(
         tmesh,
         ElasticMaterial(E, NU),
@@ -68,7 +79,7 @@ def sneddon(plate, zone=no_zone, alpha=100.0, degree=2):
         zone=zone,
         degree=degree,
         rollers={"symmetry_x": 0},
-        fixed=["outer"],
+        fixed=tmesh.facet_groups("outer"),
     )
     solid.solve(Loads(crack_pressure=P))
     wall = time.perf_counter() - t0
@@ -83,13 +94,13 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true")
     args = parser.parse_args()
     fine = [A / 10, A / 20, A / 40] if args.quick else [A / 10, A / 20, A / 40, A / 80, A / 160]
-    sneddon(CrackPlate(A, 50 * A, A / 10, 10 * A))  # compile the forms once
+    sneddon(crack_plate(50 * A, A / 10, 10 * A))  # compile the forms once
 
     say("\n## 1. Sneddon, +-50a plate, DG2 blocks, crack faces only (Nitsche glue elsewhere)")
     say("| h | cells | dofs | centre error | wall (mesh+solve) | solve |")
     say("|---|---|---|---|---|---|")
     for h in fine:
-        err, wall, solve, cells, dofs = sneddon(CrackPlate(A, 50 * A, h, 10 * A))
+        err, wall, solve, cells, dofs = sneddon(crack_plate(50 * A, h, 10 * A))
         say(
             f"| a/{A / h:.0f} | {cells} | {dofs} | {100 * err:+.3f} % | {wall:.2f} s "
             f"| {solve:.2f} s |"
@@ -99,7 +110,7 @@ def main() -> None:
     say("| h | cells | centre error vs infinite-plate Sneddon | wall |")
     say("|---|---|---|---|")
     for h in fine[:3]:
-        err, wall, _, cells, _ = sneddon(CrackPlate(A, 0.5, h, 0.05, growth=0.5))
+        err, wall, _, cells, _ = sneddon(crack_plate(0.5, h, 0.05, grading=0.5))
         say(f"| a/{A / h:.0f} | {cells} | {100 * err:+.3f} % | {wall:.2f} s |")
 
     say("\n## 3. Spring stiffness: springs on all facets of |x| < 3a, |y| < 2a (h = a/20)")
@@ -107,7 +118,7 @@ def main() -> None:
     say("|---|---|---|")
     box = lambda x: (np.abs(x[0]) < 3 * A) & (np.abs(x[1]) < 2 * A)  # noqa: E731
     for alpha in (1.0, 10.0, 100.0, 1e3, 1e4):
-        err, _, solve, _, _ = sneddon(CrackPlate(A, 50 * A, A / 20, 10 * A), zone=box, alpha=alpha)
+        err, _, solve, _, _ = sneddon(crack_plate(50 * A, A / 20, 10 * A), zone=box, alpha=alpha)
         say(f"| {alpha:g} | {100 * err:+.3f} % | {solve:.2f} s |")
 
     say("\n## 4. Penny crack (quarter model, +-10a block, DG2)")
@@ -123,7 +134,7 @@ def main() -> None:
             zone=no_zone,
             degree=2,
             rollers={"symmetry_x": 0, "symmetry_y": 1},
-            fixed=["outer"],
+            fixed=tmesh.facet_groups("outer"),
         )
         solid.solve(Loads(crack_pressure=P))
         err = opening(solid, [1e-9, 1e-9, 0.0], 2) / analytic.penny_opening(0.0, A, P, E, NU) - 1
@@ -141,15 +152,15 @@ def main() -> None:
     for h in (radius / 10, radius / 20):
         for ratio in (1.0, 1.3, 1.5, 1.7):
             t0 = time.perf_counter()
-            plate = BoreholePlate(radius, 40 * radius, h, 8 * radius, quarter=False, ring_layers=4)
+            tmesh = mesh_geometry(borehole_plate(radius, h))
             solid = CDEMSolid(
-                create_borehole_plate(plate),
+                tmesh,
                 ElasticMaterial(21.5e9, 0.25),
                 InSituStress(ratio * 10 * MPa, 10 * MPa),
                 InterfaceModel(tensile_strength=3 * MPa, cohesion=17 * MPa, friction_angle=40),
                 zone=lambda x: np.hypot(x[0], x[1]) < 4 * radius,
                 degree=2,
-                fixed=["outer"],
+                fixed=tmesh.facet_groups("outer"),
             )
             pb = solid.ramp(
                 Loads(cavity={"wellbore_wall": 0.0}),

@@ -22,9 +22,11 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
+from hfcdem.config.geometry import KGDStrip
 from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
+from hfcdem.config.parts import Crack, MeshSizing, Plate
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
-from hfcdem.mesh.verification import PathPlate, create_path_plate
+from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid
 
 ROCK = ElasticMaterial(25e9, 0.25)
@@ -41,17 +43,17 @@ def run(
 ) -> tuple[HydraulicFracture, float, list[tuple[float, float]]]:
     """One KGD run on a half model; returns the solver, its wall time and l(t)."""
     t0 = time.perf_counter()
-    tm = create_path_plate(
-        PathPlate(path_length=32.0, half_width=200.0, size_on_path=dx, size_far=40.0)
-    )
+    # half model 200 m wide: one open facet at the inlet, a 32 m path of dx facets
+    sizing = MeshSizing(dx, 40.0, grading=0.3, path_size=dx, size_integration="exact")
+    tm = mesh_geometry(KGDStrip(Plate(400.0, 400.0), Crack(2 * dx, 64.0), sizing, symmetry=("x",)))
     solid = CDEMSolid(
         tm,
         ROCK,
         InSituStress(stress, stress, stress),
         InterfaceModel(alpha=1e3, tensile_strength=strength, cohesion=1e10, break_rule="all"),
-        zone="path",
+        zone="fracture_path",
         rollers={"symmetry_x": 0},
-        fixed=("outer",),
+        fixed=tm.facet_groups("outer"),
     )
     hf = HydraulicFracture(
         solid,

@@ -16,9 +16,11 @@ import time
 import numpy as np
 from mpi4py import MPI
 
+from hfcdem.config.geometry import BoreholeSquare
 from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
+from hfcdem.config.parts import MeshSizing, Plate, Wellbore
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
-from hfcdem.mesh.verification import BoreholePlate, create_borehole_plate
+from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid
 
 A, SH, T0 = 0.03, 20e6, 5e6
@@ -26,7 +28,11 @@ A, SH, T0 = 0.03, 20e6, 5e6
 
 def first_break(sh_min: float, size: float, wet: bool) -> float:
     """Cavity pressure of the state located on the first break."""
-    tmesh = create_borehole_plate(BoreholePlate(A, 0.5, size, 0.1, quarter=False, ring_layers=4))
+    # the whole 1 m plate, four structured rings of the wall size (borehole_plate.toml)
+    sizing = MeshSizing(
+        size, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
+    )
+    tmesh = mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing))
     solid = CDEMSolid(
         tmesh,
         ElasticMaterial(20e9, 0.25),
@@ -35,7 +41,7 @@ def first_break(sh_min: float, size: float, wet: bool) -> float:
             alpha=100, tensile_strength=T0, cohesion=60e6, friction_angle=30, break_rule="all"
         ),
         zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
-        fixed=("outer",),
+        fixed=tmesh.facet_groups("outer"),
     )
     hf = HydraulicFracture(
         solid,

@@ -31,12 +31,14 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.config.geometry import BoreholeSquare
 from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
+from hfcdem.config.parts import MeshSizing, Plate, Wellbore
 from hfcdem.info import versions
 from hfcdem.io.files import prepare_output_dir, write_json, write_solid_results
 from hfcdem.io.plots import plot_interface_states, render_field
 from hfcdem.io.sampling import interpolate_expression
-from hfcdem.mesh.verification import BoreholePlate, create_borehole_plate
+from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid, Loads
 from hfcdem.solid.interfaces import FacetState
 
@@ -71,8 +73,10 @@ def main(argv: list[str] | None = None) -> dict:
 
     # Four structured layers around the wall put radial interfaces at every
     # angle step, including along SH, where Kirsch says the wall fails first.
-    plate = BoreholePlate(a, 40 * a, args.size, 8 * a, quarter=False, ring_layers=4)
-    tmesh = create_borehole_plate(plate, comm)
+    sizing = MeshSizing(
+        args.size, 8 * a, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
+    )
+    tmesh = mesh_geometry(BoreholeSquare(Plate(80 * a, 80 * a), Wellbore(2 * a, "z"), sizing), comm)
     cells = tmesh.mesh.topology.index_map(2).size_global
     log(f"mesh: {cells} triangles in {tmesh.seconds:.2f} s on {comm.size} rank(s)")
 
@@ -95,7 +99,7 @@ def main(argv: list[str] | None = None) -> dict:
         springs,
         zone=lambda x: np.hypot(x[0], x[1]) < 6 * a,
         degree=2,
-        fixed=["outer"],
+        fixed=tmesh.facet_groups("outer"),
     )
     solid.progress = log
     log(f"interfaces: {comm.allreduce(int(solid.owned.sum()), op=MPI.SUM)} breakable facets")

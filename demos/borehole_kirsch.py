@@ -29,12 +29,14 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.config.geometry import BoreholeSquare
 from hfcdem.config.materials import ElasticMaterial, InSituStress
+from hfcdem.config.parts import MeshSizing, Plate, Wellbore
 from hfcdem.info import versions
 from hfcdem.io.files import prepare_output_dir, write_csv, write_fields, write_json
 from hfcdem.io.plots import plot_lines, render_field
 from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
-from hfcdem.mesh.verification import BoreholePlate, create_borehole_plate
+from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.elastic import solve_cavity_pressure
 
 MPa = 1e6
@@ -65,15 +67,17 @@ def main(argv: list[str] | None = None) -> dict:
     # perturbation has decayed to below 0.1 % of the stresses.
     material = ElasticMaterial(youngs_modulus=21.5e9, poisson_ratio=0.25)
     in_situ = InSituStress(sh_max=args.sh_max * MPa, sh_min=args.sh_min * MPa)
-    plate = BoreholePlate(
-        radius=args.radius,
-        half_width=40.0 * args.radius,
-        size_at_wall=args.size,
-        size_far=8.0 * args.radius,
+    # A quarter plate (x, y >= 0), the element size growing from the wall at 0.25.
+    sizing = MeshSizing(
+        args.size, 8.0 * args.radius, grading=0.25, circle_elements=6, size_integration="exact"
+    )
+    width = 80.0 * args.radius
+    plate = BoreholeSquare(
+        Plate(width, width), Wellbore(2.0 * args.radius, "z"), sizing, symmetry=("x", "y")
     )
 
     # Gmsh meshes on rank 0; DOLFINx distributes with shared-facet ghosting.
-    tmesh = create_borehole_plate(plate, comm)
+    tmesh = mesh_geometry(plate, comm)
     num_cells = tmesh.mesh.topology.index_map(2).size_global
     log(f"mesh: {num_cells} triangles in {tmesh.seconds:.2f} s on {comm.size} rank(s)")
 

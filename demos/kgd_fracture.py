@@ -28,11 +28,13 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
+from hfcdem.config.geometry import KGDStrip
 from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
+from hfcdem.config.parts import Crack, MeshSizing, Plate
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
 from hfcdem.info import versions
 from hfcdem.io.files import prepare_output_dir, write_interfaces, write_json
-from hfcdem.mesh.verification import PathPlate, create_path_plate
+from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid
 
 # seed 000, section 4.2: rock, water and the pump (per metre of fracture height)
@@ -57,20 +59,20 @@ def main(argv: list[str] | None = None) -> dict:
     stress = args.stress * 1e6
 
     # A 400 m half plate: far enough that its fixed edges do not stiffen a
-    # fracture of 20 m.  The path (32 m) is split into facets of exactly dx.
-    tmesh = create_path_plate(
-        PathPlate(path_length=32.0, half_width=200.0, size_on_path=args.dx, size_far=40.0),
-        comm,
-    )
+    # fracture of 20 m.  The path (32 m) is split into facets of exactly dx, the
+    # first of them open at the start (the crack), the injection point a vertex.
+    sizing = MeshSizing(args.dx, 40.0, grading=0.3, path_size=args.dx, size_integration="exact")
+    strip = KGDStrip(Plate(400.0, 400.0), Crack(2 * args.dx, 64.0), sizing, symmetry=("x",))
+    tmesh = mesh_geometry(strip, comm)
     # Springs on the path only, zero tensile strength: the KGD's zero toughness.
     solid = CDEMSolid(
         tmesh,
         ROCK,
         InSituStress(sh_max=stress, sh_min=stress, sv=stress),
         InterfaceModel(alpha=1e3, tensile_strength=0.0, cohesion=1e10, break_rule="all"),
-        zone="path",
+        zone="fracture_path",
         rollers={"symmetry_x": 0},
-        fixed=("outer",),
+        fixed=tmesh.facet_groups("outer"),
     )
     # Half the rate enters the half model; the fracture is full of fluid to its
     # tip (no lag), as the self-similar solution assumes.

@@ -33,6 +33,7 @@ _API = {
     # mesh: a scene becomes a tagged DOLFINx mesh
     "create_scene_mesh": "hfcdem.mesh.build",
     "mesh_scene": "hfcdem.mesh.build",
+    "mesh_geometry": "hfcdem.mesh.build",
     "TaggedMesh": "hfcdem.mesh.tagged",
     "MeshingError": "hfcdem.mesh.tagged",
     # solid: blocks and interface springs

@@ -10,16 +10,12 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.config.geometry import BoreholeSquare, CrackPlate
 from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
+from hfcdem.config.parts import Crack, MeshSizing, Plate, Wellbore
 from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
-from hfcdem.mesh.verification import (
-    BoreholePlate,
-    CrackPlate,
-    PennyBlock,
-    create_borehole_plate,
-    create_crack_plate,
-    create_penny_block,
-)
+from hfcdem.mesh.build import mesh_geometry
+from hfcdem.mesh.penny import PennyBlock, create_penny_block
 from hfcdem.solid.cdem import CDEMSolid, Loads
 from hfcdem.solid.interfaces import FacetState
 
@@ -27,6 +23,14 @@ MPa = 1e6
 E, NU, P, A = 210e9, 0.25, 22e6, 0.1  # Table 1 of the perforation paper
 STEEL = ElasticMaterial(E, NU)
 NO_ZONE = None
+
+
+def crack_plate(half_width, size, size_far, comm=MPI.COMM_WORLD, half=True, grading=0.25):
+    """The Sneddon plate: a crack of half-length A in a square of ``half_width``."""
+    sizing = MeshSizing(size, size_far, grading=grading, size_integration="exact")
+    plate = Plate(2 * half_width, 2 * half_width)
+    geom = CrackPlate(plate, Crack(2 * A), sizing, symmetry=("x",) if half else ())
+    return mesh_geometry(geom, comm)
 
 
 def no_zone(x):
@@ -43,7 +47,7 @@ def crack_opening(solid, x, axis=1):
 
 
 def sneddon_solid(size, comm=MPI.COMM_WORLD, zone=no_zone, alpha=100.0, sigma0=0.0, pressure=P):
-    tmesh = create_crack_plate(CrackPlate(A, 50 * A, size, 10 * A), comm)
+    tmesh = crack_plate(50 * A, size, 10 * A, comm)
     solid = CDEMSolid(
         tmesh,
         STEEL,
@@ -52,7 +56,7 @@ def sneddon_solid(size, comm=MPI.COMM_WORLD, zone=no_zone, alpha=100.0, sigma0=0
         zone=zone,
         degree=2,
         rollers={"symmetry_x": 0},
-        fixed=["outer"],
+        fixed=tmesh.facet_groups("outer"),
     )
     solid.solve(Loads(crack_pressure=pressure))
     return solid
@@ -108,7 +112,7 @@ def test_penny_crack_centre_opening_within_5_percent():
         zone=no_zone,
         degree=2,
         rollers={"symmetry_x": 0, "symmetry_y": 1},
-        fixed=["outer"],
+        fixed=tmesh.facet_groups("outer"),
     )
     solid.solve(Loads(crack_pressure=P))
     w0 = crack_opening(solid, [[1e-9, 1e-9, 0.0]], axis=2)[0]
@@ -120,13 +124,23 @@ RADIUS = 0.035
 
 
 def borehole_solid(sh_ratio, comm=MPI.COMM_WORLD, size=RADIUS / 10, model=None, quarter=False):
-    plate = BoreholePlate(RADIUS, 40 * RADIUS, size, 8 * RADIUS, quarter=quarter, ring_layers=4)
-    tmesh = create_borehole_plate(plate, comm)
+    sizing = MeshSizing(
+        size, 8 * RADIUS, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
+    )
+    plate = Plate(80 * RADIUS, 80 * RADIUS)
+    geom = BoreholeSquare(
+        plate, Wellbore(2 * RADIUS, "z"), sizing, symmetry=("x", "y") if quarter else ()
+    )
+    tmesh = mesh_geometry(geom, comm)
     sh = 10 * MPa
     model = model or InterfaceModel(
         alpha=100, tensile_strength=3 * MPa, cohesion=17 * MPa, friction_angle=40
     )
-    kwargs = {"rollers": {"symmetry_x": 0, "symmetry_y": 1}} if quarter else {"fixed": ["outer"]}
+    kwargs = (
+        {"rollers": {"symmetry_x": 0, "symmetry_y": 1}}
+        if quarter
+        else {"fixed": tmesh.facet_groups("outer")}
+    )
     return CDEMSolid(
         tmesh,
         ROCK,
@@ -254,7 +268,7 @@ def test_weibull_strengths_are_reproducible_and_rank_independent():
 
 
 def test_bad_solver_settings_are_named():
-    tmesh = create_crack_plate(CrackPlate(A, 5 * A, A / 4, A))
+    tmesh = crack_plate(5 * A, A / 4, A)
     with pytest.raises(ValueError, match="degree"):
         CDEMSolid(tmesh, STEEL, InSituStress(0, 0), InterfaceModel(), degree=3)
     with pytest.raises(ValueError, match="solver"):
@@ -264,18 +278,18 @@ def test_bad_solver_settings_are_named():
 
 
 def test_iterative_solver_matches_direct():
-    plate = CrackPlate(A, 50 * A, A / 10, 10 * A)
+    tmesh = crack_plate(50 * A, A / 10, 10 * A)
     results = []
     for kind in ("direct", "iterative"):
         solid = CDEMSolid(
-            create_crack_plate(plate),
+            tmesh,
             STEEL,
             InSituStress(0, 0),
             InterfaceModel(),
             zone=lambda x: np.abs(x[1]) < A,
             degree=2,
             rollers={"symmetry_x": 0},
-            fixed=["outer"],
+            fixed=tmesh.facet_groups("outer"),
             solver=kind,
         )
         solid.solve(Loads(crack_pressure=P))
@@ -332,7 +346,7 @@ def test_per_facet_crack_pressure_matches_uniform_pressure():
         zone=no_zone,
         degree=2,
         rollers={"symmetry_x": 0},
-        fixed=["outer"],
+        fixed=uniform.tmesh.facet_groups("outer"),
     )
     per_facet.solve(Loads(crack_pressure=np.full(per_facet.num_facets, P)))
     # midpoint quadrature of a per-facet value: same load, so the same opening to O(h^2)
@@ -351,7 +365,7 @@ def test_coulomb_friction_on_a_closed_crack_matches_mode_ii_slip(friction_angle)
     from hfcdem.solid.cdem import SLIP, STICK
 
     a, e, nu = A, 21.5e9, 0.25
-    tmesh = create_crack_plate(CrackPlate(a, 30 * a, a / 20, 6 * a, half_model=False))
+    tmesh = crack_plate(30 * a, a / 20, 6 * a, half=False)
     solid = CDEMSolid(
         tmesh,
         ElasticMaterial(e, nu),
@@ -359,7 +373,7 @@ def test_coulomb_friction_on_a_closed_crack_matches_mode_ii_slip(friction_angle)
         InterfaceModel(alpha=1e3, friction_angle=friction_angle),
         zone=no_zone,
         degree=2,
-        fixed=["outer"],
+        fixed=tmesh.facet_groups("outer"),
     )
     solid.is_crack[:] = False  # a broken interface governed by contact, not an open crack
     solid.state[:] = FacetState.SHEAR
@@ -384,15 +398,15 @@ def test_coulomb_friction_on_a_closed_crack_matches_mode_ii_slip(friction_angle)
 def test_stiffness_is_symmetric_so_cholesky_applies():
     # the direct solver factorises K as LDL^T: springs in every state, the Nitsche glue
     # and the Dirichlet rows must keep it symmetric
-    plate = CrackPlate(A, 5 * A, A / 5, A)
+    tmesh = crack_plate(5 * A, A / 5, A)
     solid = CDEMSolid(
-        create_crack_plate(plate),
+        tmesh,
         STEEL,
         InSituStress(10 * MPa, 5 * MPa),
         InterfaceModel(),
         zone=lambda x: np.abs(x[1]) < A,
         rollers={"symmetry_x": 0},
-        fixed=["outer"],
+        fixed=tmesh.facet_groups("outer"),
     )
     # one facet of each broken state next to the intact springs and the glue
     some = np.flatnonzero(~solid.is_crack)[:3]

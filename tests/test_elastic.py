@@ -5,18 +5,29 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.config.geometry import BoreholeSquare
 from hfcdem.config.materials import ElasticMaterial, InSituStress
+from hfcdem.config.parts import MeshSizing, Plate, Wellbore
 from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
-from hfcdem.mesh.verification import BoreholePlate, create_borehole_plate
+from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.elastic import solve_cavity_pressure
 
 MPa = 1e6
 ROCK = ElasticMaterial(21.5e9, 0.25)
 
 
+def quarter_plate(a, half_width, size, size_far, comm=MPI.COMM_WORLD):
+    """A quarter plate around a borehole of radius ``a`` (grading 0.25, exact sizing)."""
+    sizing = MeshSizing(size, size_far, grading=0.25, circle_elements=6, size_integration="exact")
+    plate = Plate(2 * half_width, 2 * half_width)
+    return mesh_geometry(
+        BoreholeSquare(plate, Wellbore(2 * a, "z"), sizing, symmetry=("x", "y")), comm
+    )
+
+
 def wall_hoop_stress(comm, size, sh_max, sh_min, pw, theta):
     a = 0.035
-    tmesh = create_borehole_plate(BoreholePlate(a, 40 * a, size, 8 * a), comm)
+    tmesh = quarter_plate(a, 40 * a, size, 8 * a, comm)
     sol = solve_cavity_pressure(
         tmesh,
         ROCK,
@@ -55,7 +66,7 @@ def test_kirsch_error_falls_with_mesh_size():
 def test_hydrostatic_state_without_cavity_load_stays_still():
     # pressure equal to an isotropic in-situ stress: nothing changes, nothing moves
     a = 0.035
-    tmesh = create_borehole_plate(BoreholePlate(a, 20 * a, 0.007, 4 * a))
+    tmesh = quarter_plate(a, 20 * a, 0.007, 4 * a)
     sol = solve_cavity_pressure(
         tmesh,
         ROCK,

@@ -11,15 +11,12 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
+from hfcdem.config.geometry import BoreholeSquare, KGDStrip
 from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
+from hfcdem.config.parts import Crack, MeshSizing, Plate, Wellbore
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
 from hfcdem.flow.fluid import CarterLeakOff
-from hfcdem.mesh.verification import (
-    BoreholePlate,
-    PathPlate,
-    create_borehole_plate,
-    create_path_plate,
-)
+from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.workflows.breakdown import detect_breakdown
 
@@ -31,8 +28,10 @@ Q0 = 4e-3
 @cache
 def _path_mesh(dx: float, comm_name: str = "world"):
     comm = MPI.COMM_WORLD if comm_name == "world" else MPI.COMM_SELF
-    plate = PathPlate(path_length=32.0, half_width=200.0, size_on_path=dx, size_far=40.0)
-    return create_path_plate(plate, comm)
+    # the verified KGD mesh: one open facet at the inlet, a 32 m path of dx facets
+    sizing = MeshSizing(dx, 40.0, grading=0.3, path_size=dx, size_integration="exact")
+    strip = KGDStrip(Plate(400.0, 400.0), Crack(2 * dx, 64.0), sizing, symmetry=("x",))
+    return mesh_geometry(strip, comm)
 
 
 def _kgd(
@@ -44,14 +43,15 @@ def _kgd(
     strength: float = 0.0,
     **settings,
 ) -> HydraulicFracture:
+    tmesh = _path_mesh(dx, comm_name)
     solid = CDEMSolid(
-        _path_mesh(dx, comm_name),
+        tmesh,
         ROCK,
         InSituStress(stress, stress, stress),
         InterfaceModel(alpha=1e3, tensile_strength=strength, cohesion=1e10, break_rule="all"),
-        zone="path",
+        zone="fracture_path",
         rollers={"symmetry_x": 0},
-        fixed=("outer",),
+        fixed=tmesh.facet_groups("outer"),
     )
     opts = dict(injection_point=(0.0, 0.0), filling="no_lag", dt_initial=0.5, dt_max=0.5)
     opts.update(initial_pressure=stress)
@@ -140,7 +140,10 @@ A = 0.03  # seed 001: 60 mm borehole in a 1 m block, SH 20 MPa
 
 @cache
 def _borehole_mesh(size: float = A / 10):
-    return create_borehole_plate(BoreholePlate(A, 0.5, size, 0.1, quarter=False, ring_layers=4))
+    sizing = MeshSizing(
+        size, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
+    )
+    return mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing))
 
 
 def _borehole(
@@ -153,15 +156,16 @@ def _borehole(
     permeate: bool = False,
     **fluid,
 ):
+    tmesh = _borehole_mesh(size)
     solid = CDEMSolid(
-        _borehole_mesh(size),
+        tmesh,
         ElasticMaterial(20e9, 0.25),
         InSituStress(sh_max=20e6, sh_min=sh_min, sv=20e6),
         InterfaceModel(
             alpha=100, tensile_strength=5e6, cohesion=60e6, friction_angle=30, break_rule="all"
         ),
         zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
-        fixed=("outer",),
+        fixed=tmesh.facet_groups("outer"),
     )
     return HydraulicFracture(
         solid,

@@ -81,7 +81,7 @@ def test_kgd_injection_point_is_a_vertex_and_zone_is_the_band():
 
 
 def test_expected_measures_of_a_quarter_borehole():
-    g = load_scene(SCENES / "borehole_plate.toml").geometry
+    g = load_scene(SCENES / "borehole_plate.toml", overrides={"geometry.symmetry": "auto"}).geometry
     e = plates.expected_measures(g)
     assert e["areas"]["wellbore_wall"] == pytest.approx(np.pi * 0.03 / 2)
     assert e["areas"]["symmetry_x"] == pytest.approx(0.5 - 0.03)

@@ -5,15 +5,15 @@ import dolfinx.fem.petsc
 import numpy as np
 import pytest
 import ufl
+from hfcdem.mesh.verification import CrackPlate, create_crack_plate
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
 from hfcdem.io.sampling import evaluate_at_points
 from hfcdem.mesh.tagged import TaggedMesh
-from hfcdem.mesh.verification import CrackPlate, create_crack_plate
 from hfcdem.solid.cdem import CDEMSolid, Loads
-from hfcdem.solid.elastic import ElasticMaterial, InSituStress, strain, stress
-from hfcdem.solid.interfaces import InterfaceModel
+from hfcdem.solid.elastic import strain, stress
 from hfcdem.solid.reduction import ReducedSolid, VertexClusters, glued_facet_set
 
 MPa = 1e6

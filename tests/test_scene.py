@@ -134,8 +134,13 @@ def test_plates():
     assert isinstance(kgd, KGDStrip) and kgd.symmetry == ("x",)
     assert kgd.crack.path_length == pytest.approx(48.0)
     hole = scene({"catalogue": "borehole_plate"}).geometry
-    assert isinstance(hole, BoreholeSquare) and hole.symmetry == ("x", "y")
+    assert isinstance(hole, BoreholeSquare) and hole.symmetry == ()
     assert hole.wellbore.diameter == pytest.approx(0.06)
+    # the verified set-ups: structured wall rings, exact facets along the KGD path
+    assert hole.mesh.wall_rings == 4 and hole.ring_radius == pytest.approx(0.03 + 4 * 0.003)
+    assert kgd.mesh.path_size == pytest.approx(0.5) and kgd.path_start == pytest.approx(0.5)
+    plain = scene({"catalogue": "crack_plate"}).geometry.mesh
+    assert (plain.wall_rings, plain.path_size, plain.size_integration) == (0, None, "fast")
 
 
 def test_tunnel_starts_inside_the_wellbore():
@@ -259,6 +264,56 @@ BAD = [
         _geometry("kgd_strip", crack={"path_length": "1 m"}),
         {},
         "geometry.crack.path_length: 1 m must be at least",
+    ),
+    (
+        _geometry("borehole_plate", mesh={"wall_rings": -1}),
+        {},
+        "geometry.mesh.wall_rings: expected an integer in [0, 200], got -1",
+    ),
+    (
+        _geometry("borehole_plate", mesh={"wall_rings": 2.5}),
+        {},
+        "geometry.mesh.wall_rings: expected an integer",
+    ),
+    (
+        _geometry("borehole_plate", mesh={"wall_rings": 200}),
+        {},
+        "geometry.mesh.wall_rings: 200 rings of 3 mm reach 630 mm",
+    ),
+    (
+        _geometry("borehole_plate", fracturable={"shape": "sphere", "radius": "200 mm"}),
+        {},
+        "geometry.mesh.wall_rings: structured wall rings cannot be combined",
+    ),
+    (
+        _geometry("borehole_plate", mesh={"path_size": "3 mm"}),
+        {},
+        "geometry.mesh.path_size: not used by a borehole_plate",
+    ),
+    (
+        _geometry("crack_plate", mesh={"wall_rings": 2}),
+        {},
+        "geometry.mesh.wall_rings: not used by a crack_plate",
+    ),
+    (
+        _geometry("kgd_strip", mesh={"path_size": "0.3 m"}),
+        {},
+        "geometry.mesh.path_size: 300 mm must divide each wing of crack.length",
+    ),
+    (
+        _geometry("kgd_strip", crack={"path_length": "47.2 m"}),
+        {},
+        "geometry.mesh.path_size: 500 mm must divide each wing of crack.path_length",
+    ),
+    (
+        _geometry("borehole_plate", mesh={"size_integration": "slow"}),
+        {},
+        "geometry.mesh.size_integration: expected one of 'fast', 'exact'",
+    ),
+    (
+        _geometry(mesh={"size_integration": "exact"}),
+        {},
+        "geometry.mesh.size_integration: not used by a perforated_block",
     ),
     ({"catalogue": "perforation_no9"}, {}, "geometry.catalogue: unknown entry 'perforation_no9'"),
     ({"kind": "sphere_pack"}, {}, "geometry.kind: expected one of"),

@@ -7,7 +7,7 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem.cli import main
-from hfcdem.config.scene import load_scene
+from hfcdem.config.scene import load_scene, parse_scene
 from hfcdem.config.tables import SceneError
 from hfcdem.workflows.run import run_scene
 
@@ -81,10 +81,9 @@ def test_bad_load_names_the_field(key, value, field):
 
 
 def test_a_static_scene_without_a_crack_is_refused(shared_tmp_path):
-    scene = load_scene(
-        "meshes/scenes/borehole_plate.toml",
-        "coarse",
-        overrides={
+    scene = parse_scene(
+        {
+            "geometry": {"catalogue": "borehole_plate"},
             "rock": {
                 "youngs_modulus": "20 GPa",
                 "poisson_ratio": 0.25,
@@ -94,6 +93,7 @@ def test_a_static_scene_without_a_crack_is_refused(shared_tmp_path):
             "stress": {"sh_max": "0 MPa", "sh_min": "0 MPa", "sv": "0 MPa"},
             "load": {"crack_pressure": "1 MPa"},
         },
+        resolution="coarse",
     )
     with pytest.raises(SceneError, match="no pre-existing crack"):
         run_scene(scene, shared_tmp_path / "nocrack")

@@ -297,7 +297,10 @@ _SNEDDON_PLATE: dict[str, Any] = {
 }
 
 # Seed hfdda sec. 4.2: 160 m x 160 m, injection at the origin, the fracture
-# may run 24 m each way; 1 m of each wing is opened at the start.
+# may run 24 m each way; 1 m of each wing is opened at the start.  The crack and
+# the path are split into facets of exactly the wall size (path_size), as in the
+# KGD verification (benchmarks/kgd_verification.py): the half-length moves in
+# whole facets.
 _KGD: dict[str, Any] = {
     "kind": "kgd_strip",
     "plate": {"width": "160 m", "height": "160 m"},
@@ -308,22 +311,29 @@ _KGD: dict[str, Any] = {
         "size": "0.5 m",
         "size_far": "16 m",
         "grading": 0.25,
-        "resolutions": {"coarse": {"size": "1 m", "size_far": "32 m"}},
+        "path_size": "0.5 m",
+        "resolutions": {"coarse": {"size": "1 m", "size_far": "32 m", "path_size": "1 m"}},
     },
 }
 
-# Seed pfc2d sec. 3.2: 1000 mm square, 60 mm borehole at the centre
+# Seed pfc2d sec. 3.2 / seed 001: 1000 mm square, 60 mm borehole at the centre.  The
+# whole plate: a breakdown crack along SH (y = 0) must be interior facets, and a
+# quarter model makes y = 0 a roller.  Four structured rings of the wall size put
+# radial facets at every angle step, including along SH; the default mesh is the
+# one of tests/test_hydrofrac.py and benchmarks/wall_joint_verification.py (a/10).
 _BOREHOLE: dict[str, Any] = {
     "kind": "borehole_plate",
     "plate": {"width": "1000 mm", "height": "1000 mm"},
     "wellbore": {"diameter": "60 mm"},
-    "symmetry": "auto",
+    "symmetry": "none",
     "mesh": {
-        "size": "2 mm",
-        "size_far": "50 mm",
-        "grading": 0.3,
-        "circle_elements": 64,
-        "resolutions": {"coarse": {"size": "5 mm", "size_far": "100 mm", "circle_elements": 24}},
+        "size": "3 mm",
+        "size_far": "100 mm",
+        "grading": 0.25,
+        "circle_elements": 6,  # no cap on the wall size from the circle: size is the knob
+        "wall_rings": 4,
+        "size_integration": "exact",
+        "resolutions": {"coarse": {"size": "6 mm"}},
     },
 }
 

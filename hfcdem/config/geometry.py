@@ -89,6 +89,23 @@ def _check_symmetry_axes(symmetry: Sequence[str], allowed: Sequence[str]) -> tup
     return tuple(sorted(axes))
 
 
+def _refuse_mesh_options(sizing: MeshSizing, kind: str, keys: Sequence[str]) -> None:
+    """Refuse the MeshSizing options ``keys`` that a ``kind`` scene does not use."""
+    unused = {
+        "wall_rings": sizing.wall_rings != 0,
+        "path_size": sizing.path_size is not None,
+        "size_integration": sizing.size_integration != "fast",
+    }
+    owner = {
+        "wall_rings": "a borehole_plate",
+        "path_size": "a kgd_strip",
+        "size_integration": "a 2D plate",
+    }
+    for key in keys:
+        if unused[key]:
+            raise SceneError(f"mesh.{key}", f"not used by a {kind}; only {owner[key]} takes it")
+
+
 # ---------------------------------------------------------------------------
 
 
@@ -218,6 +235,7 @@ class PerforatedBlock:
                 raise SceneError("fracturable.offset", "the slab must cross the block")
 
     def _check_mesh(self) -> None:
+        _refuse_mesh_options(self.mesh, self.kind, ("wall_rings", "path_size", "size_integration"))
         if not self.perforations:
             return
         thinnest = min(min(p.profile.diameters) for p in self.perforations)
@@ -426,6 +444,7 @@ class CrackPlate:
         object.__setattr__(self, "symmetry", _check_symmetry_axes(self.symmetry, ("x", "y")))
         if self.crack.length > 0.8 * self.plate.width:
             raise SceneError("crack.length", "must be at most 0.8 x the plate width")
+        _refuse_mesh_options(self.mesh, self.kind, ("wall_rings", "path_size"))
         _check_plate_zone(self.fracturable, self.plate)
         _check_plate_symmetry(self, {"y": _CRACK_ON_PLANE})
         _check_plate_mesh(self, 0.25 * self.crack.length, "a quarter of the crack")
@@ -461,9 +480,32 @@ class KGDStrip:
         assert path is not None
         if path > 0.9 * self.plate.width:
             raise SceneError("crack.path_length", "must be at most 0.9 x the plate width")
+        _refuse_mesh_options(self.mesh, self.kind, ("wall_rings",))
+        self._check_path_size(0.5 * self.crack.length, 0.5 * path)
         _check_plate_zone(self.fracturable, self.plate)
         _check_plate_symmetry(self, {"y": _CRACK_ON_PLANE})
         _check_plate_mesh(self, 0.5 * self.crack.length, "half the initial crack")
+
+    def _check_path_size(self, half: float, path: float) -> None:
+        """Refuse a ``mesh.path_size`` that does not split the crack and path into whole facets."""
+        step = self.mesh.path_size
+        if step is None:
+            return
+        for what, length, least in (("crack.length", half, 1), ("crack.path_length", path, 0)):
+            if what == "crack.path_length":
+                length -= half
+            count = length / step
+            if abs(count - round(count)) > 1e-6 * max(count, 1.0) or round(count) < least:
+                raise SceneError(
+                    "mesh.path_size",
+                    f"{show_length(step)} must divide each wing of {what} into whole facets "
+                    f"({show_length(length)} is {count:.6g} facets)",
+                )
+
+    @property
+    def path_start(self) -> float:
+        """Element size on the crack and the path (where the grading starts)."""
+        return self.mesh.path_size if self.mesh.path_size is not None else self.mesh.size
 
     def symmetric_axes(self) -> tuple[str, ...]:
         """Planes the scene may be cut along."""
@@ -472,7 +514,7 @@ class KGDStrip:
     def estimated_cells(self) -> float:
         """Rough number of triangles."""
         path = self.crack.path_length or self.crack.length
-        return _estimate_plate_cells(self, self.mesh.size, line=path)
+        return _estimate_plate_cells(self, self.path_start, line=path)
 
 
 @dataclass(frozen=True)
@@ -498,6 +540,30 @@ class BoreholeSquare:
         _check_plate_zone(self.fracturable, self.plate)
         _check_plate_symmetry(self, {})
         _check_plate_mesh(self, self.wellbore.diameter, "the borehole")
+        _refuse_mesh_options(self.mesh, self.kind, ("path_size",))
+        self._check_rings()
+
+    def _check_rings(self) -> None:
+        if not self.mesh.wall_rings:
+            return
+        if self.fracturable is not None:
+            raise SceneError(
+                "mesh.wall_rings",
+                "structured wall rings cannot be combined with a fracturable zone (the zone's "
+                "edge would cut the rings); leave one of them out",
+            )
+        if self.ring_radius >= 0.9 * float(np.min(self.plate.half[:2])):
+            raise SceneError(
+                "mesh.wall_rings",
+                f"{self.mesh.wall_rings} rings of {show_length(self.wall_size)} reach "
+                f"{show_length(self.ring_radius)} from the centre; they must end inside 0.9 x "
+                f"the half plate ({show_length(0.9 * float(np.min(self.plate.half[:2])))})",
+            )
+
+    @property
+    def ring_radius(self) -> float:
+        """Outer radius of the structured wall rings (the wall radius without rings)."""
+        return self.wellbore.radius + self.mesh.wall_rings * self.wall_size
 
     @property
     def wall_size(self) -> float:

@@ -38,6 +38,7 @@ import dataclasses
 import math
 import tomllib
 from collections.abc import Mapping
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -71,7 +72,7 @@ from hfcdem.config.parts import (
     check_vector,
     show_length,
 )
-from hfcdem.config.physics import PHYSICS_SECTIONS, parse_physics
+from hfcdem.config.physics import PHYSICS_SECTIONS, field_default, parse_physics
 from hfcdem.config.tables import MISSING, SceneError, TomlTable, build_within
 from hfcdem.config.units import FieldError, join_path
 
@@ -231,6 +232,9 @@ _MESH_KEYS = (
     "circle_elements",
     "wellbore_size",
     "algorithm",
+    "wall_rings",
+    "path_size",
+    "size_integration",
     "resolutions",
 )
 
@@ -260,13 +264,19 @@ def _read_mesh(
     value = t.quantity("size", "length")
     if size is not None:
         value, chosen = size, f"{chosen}, size {show_length(size)}"
+    default = partial(field_default, MeshSizing)
     kwargs: dict[str, Any] = {
         "size": value,
         "size_far": t.quantity("size_far", "length"),
-        "grading": t.number("grading", 0.3),
-        "circle_elements": t.number("circle_elements", 32, integer=True),
-        "wellbore_size": t.quantity("wellbore_size", "length", None),
-        "algorithm": t.string("algorithm", "delaunay"),
+        "grading": t.number("grading", default("grading")),
+        "circle_elements": t.number("circle_elements", default("circle_elements"), integer=True),
+        "wellbore_size": t.quantity("wellbore_size", "length", default("wellbore_size")),
+        "algorithm": t.string("algorithm", default("algorithm")),
+        "wall_rings": t.number("wall_rings", default("wall_rings"), integer=True),
+        "path_size": t.quantity("path_size", "length", default("path_size")),
+        "size_integration": t.string(
+            "size_integration", default("size_integration"), MeshSizing.SIZE_INTEGRATIONS
+        ),
     }
     t.finish()
     return build_within(t.path, MeshSizing, **kwargs), chosen

@@ -28,7 +28,7 @@ from dolfinx.io import XDMFFile
 from mpi4py import MPI
 
 from hfcdem.config import catalogue
-from hfcdem.config.geometry import PerforatedBlock, Scene
+from hfcdem.config.geometry import Geometry, PerforatedBlock, Scene
 from hfcdem.io.files import prepare_output_dir, write_json
 from hfcdem.mesh import block as geometry
 from hfcdem.mesh import plates
@@ -70,6 +70,14 @@ def create_scene_mesh(
 
     tmesh = mesh_from_gmsh(build, comm, gdim=geom.dim, name=scene.name)
     return SceneMesh(scene, tmesh, comm.bcast(facts, root=0), target)
+
+
+def mesh_geometry(
+    geometry: Geometry, comm: MPI.Comm = MPI.COMM_WORLD, name: str | None = None
+) -> TaggedMesh:
+    """Mesh a scene geometry without a scene file (the API of tests and benchmarks)."""
+    scene = Scene(name or geometry.kind, geometry)
+    return create_scene_mesh(scene, comm).tmesh
 
 
 # ---------------------------------------------------------------------------
@@ -309,6 +317,7 @@ __all__ = [
     "SceneMesh",
     "create_scene_mesh",
     "measure_mesh",
+    "mesh_geometry",
     "mesh_report",
     "mesh_scene",
     "write_xdmf",

@@ -46,8 +46,8 @@ def use_gradings(model: Any, fields: Sequence[int], size_max: float | None = Non
     """Make the smallest of ``fields`` the element size everywhere.
 
     ``size_max`` also caps every size and makes Gmsh's 1D size integration
-    coarser (the default 1e-9 costs seconds per scene); the verification
-    meshers leave both at Gmsh's defaults.
+    coarser (the default 1e-9 costs seconds per scene); a scene with
+    ``size_integration = "exact"`` and the penny block leave both at Gmsh's defaults.
     """
     field = model.mesh.field
     if len(fields) == 1:

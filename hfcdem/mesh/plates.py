@@ -124,15 +124,74 @@ def _sample_curve(model: Any, tag: int) -> np.ndarray:
     return np.asarray([model.getValue(1, tag, [u]) for u in params])
 
 
-def build_plate(geom: Plate2D, model: Any) -> dict[str, Any]:
-    """Create the geometry, physical groups and 2D mesh of ``geom`` in the Gmsh ``model``."""
-    gmsh.option.setNumber("General.NumThreads", 1)
-    occ = model.occ
+def _ring_sectors(occ: Any, geom: BoreholeSquare) -> None:
+    """Quarter-annulus surfaces between the wall and the ring radius, in the kept part.
+
+    Each spans 90 degrees between the axes, so its radial edges lie on the axes
+    and on the symmetry lines.
+    """
+    a, b = geom.wellbore.radius, geom.ring_radius
+    lo, _ = kept_corners(geom.plate.half[:2], geom.symmetry)
+    quarters = [k for k in range(4) if _quarter_kept(k, lo)]
+    angles = sorted({q * 0.5 * np.pi for k in quarters for q in (k, (k + 1) % 4)})
+    centre = occ.addPoint(0.0, 0.0, 0.0)
+    inner = {t: occ.addPoint(a * np.cos(t), a * np.sin(t), 0.0) for t in angles}
+    outer = {t: occ.addPoint(b * np.cos(t), b * np.sin(t), 0.0) for t in angles}
+    radial = {t: occ.addLine(inner[t], outer[t]) for t in angles}
+    for k in quarters:
+        t0, t1 = k * 0.5 * np.pi, ((k + 1) % 4) * 0.5 * np.pi
+        arc_in = occ.addCircleArc(inner[t0], centre, inner[t1])
+        arc_out = occ.addCircleArc(outer[t0], centre, outer[t1])
+        loop = occ.addCurveLoop([radial[t0], arc_out, -radial[t1], -arc_in])
+        occ.addPlaneSurface([loop])
+
+
+def _quarter_kept(k: int, lo: np.ndarray) -> bool:
+    """Whether quadrant ``k`` (0: x, y > 0; counter-clockwise) lies in the kept part."""
+    sx, sy = (1, 1) if k == 0 else (-1, 1) if k == 1 else (-1, -1) if k == 2 else (1, -1)
+    return (sx > 0 or lo[0] < 0.0) and (sy > 0 or lo[1] < 0.0)
+
+
+def _structure_rings(model: Any, geom: BoreholeSquare, tol: float) -> None:
+    """Transfinite ring sectors: arcs divided evenly, radial edges into ``wall_rings``."""
+    a, b = geom.wellbore.radius, geom.ring_radius
+    arcs = max(2, int(np.ceil(0.5 * np.pi * a / geom.wall_size)))  # per 90 degrees
+
+    def inside(dim: int, tag: int) -> bool:
+        x0, y0, _, x1, y1, _ = model.getBoundingBox(dim, tag)
+        return max(abs(x0), abs(x1), abs(y0), abs(y1)) <= b + tol
+
+    for _, curve in model.getEntities(1):
+        if inside(1, curve):
+            circle = model.getType(1, curve) in ("Circle", "Ellipse")
+            count = arcs if circle else geom.mesh.wall_rings
+            model.mesh.setTransfiniteCurve(curve, count + 1)
+    for _, surf in model.getEntities(2):
+        if inside(2, surf):
+            model.mesh.setTransfiniteSurface(surf)
+
+
+def _exact_path(model: Any, geom: KGDStrip, groups: dict[str, list[int]]) -> None:
+    """Split the crack and path curves into facets of exactly ``mesh.path_size``."""
+    step = geom.mesh.path_size
+    assert step is not None
+    for name in ("crack", "fracture_path"):
+        for curve in groups.get(name, []):
+            x0, _, _, x1, _, _ = model.getBoundingBox(1, curve)
+            model.mesh.setTransfiniteCurve(curve, round((x1 - x0) / step) + 1)
+
+
+def _plate_entities(geom: Plate2D, occ: Any) -> dict[str, list[int]]:
+    """Create the plate's surfaces and lines in Gmsh; return the cell groups' surfaces."""
     lo, hi = kept_corners(geom.plate.half[:2], geom.symmetry)
     plate = [(2, occ.addRectangle(lo[0], lo[1], 0.0, *(hi - lo)))]
     if isinstance(geom, BoreholeSquare):
-        big_r = geom.wellbore.radius
-        plate, _ = occ.cut(plate, [(2, occ.addDisk(0.0, 0.0, 0.0, big_r, big_r))])
+        hole = geom.ring_radius
+        plate, _ = occ.cut(plate, [(2, occ.addDisk(0.0, 0.0, 0.0, hole, hole))])
+        if geom.mesh.wall_rings:
+            _ring_sectors(occ, geom)
+            occ.removeAllDuplicates()
+            return {"rock": []}  # every surface, once synchronised
     tools = []
     for pieces in _crack_lines(geom).values():
         for a, b in pieces:
@@ -151,8 +210,11 @@ def build_plate(geom: Plate2D, model: Any) -> dict[str, Any]:
                 raise RuntimeError("the fracturable zone does not meet the plate")
         else:
             cells = {"rock": sorted(of_plate)}
-    occ.synchronize()
+    return cells
 
+
+def _name_curves(geom: Plate2D, model: Any) -> dict[str, list[int]]:
+    """Sort the model's curves into the named facet groups (inner curves stay unnamed)."""
     candidates = curve_candidates(geom)
     tol = 1e-6 * float(max(geom.plate.width, geom.plate.height))
     groups: dict[str, list[int]] = {}
@@ -164,26 +226,58 @@ def build_plate(geom: Plate2D, model: Any) -> dict[str, Any]:
             groups.setdefault(candidates[best][0], []).append(curve)
         elif len(model.getAdjacencies(1, curve)[0]) < 2:
             raise RuntimeError(f"cannot tell which edge curve {curve} is")
-        # else: a curve between rock and fracturable zone, inside the plate
+        # else: a curve inside the plate (zone edge, ring edge)
+    return groups
 
+
+def build_plate(geom: Plate2D, model: Any) -> dict[str, Any]:
+    """Create the geometry, physical groups and 2D mesh of ``geom`` in the Gmsh ``model``."""
+    gmsh.option.setNumber("General.NumThreads", 1)
+    cells = _plate_entities(geom, model.occ)
+    model.occ.synchronize()
+    if not cells["rock"]:
+        cells["rock"] = [t for _, t in model.getEntities(2)]
+    groups = _name_curves(geom, model)
     for name, tags in cells.items():
         if tags:
             model.addPhysicalGroup(2, tags, name=name)
     for name in sorted(groups):
         model.addPhysicalGroup(1, sorted(groups[name]), name=name)
 
-    refined = [c for n in ("crack", "fracture_path", "wellbore_wall") for c in groups.get(n, [])]
-    start = geom.wall_size if isinstance(geom, BoreholeSquare) else geom.mesh.size
-    span = float(max(hi - lo))
-    sampling = int(np.clip(np.ceil(2.0 * span / start), 50, 2000))
-    dist_max = max(geom.mesh.growth_distance(start), 1e-9)
-    grading = add_grading(model, 1, refined, start, geom.mesh.size_far, dist_max, sampling)
-    use_gradings(model, [grading], geom.mesh.size_far)
+    flat = 0.0
+    if isinstance(geom, BoreholeSquare):
+        start = geom.wall_size
+        if geom.mesh.wall_rings:
+            flat = geom.ring_radius - geom.wellbore.radius
+            # OCC pads bounding boxes by about 1e-7
+            _structure_rings(model, geom, max(1e-6 * float(geom.plate.half[0]), 1e-6))
+    else:
+        start = geom.path_start if isinstance(geom, KGDStrip) else geom.mesh.size
+        if isinstance(geom, KGDStrip) and geom.mesh.path_size is not None:
+            _exact_path(model, geom, groups)
+    _grade(model, geom, groups, start, flat)
     model.mesh.generate(2)
     return {
         "quality": element_quality(model, 2),
         "faces": {name: len(v) for name, v in sorted(groups.items())},
     }
+
+
+def _grade(
+    model: Any, geom: Plate2D, groups: dict[str, list[int]], start: float, flat: float
+) -> None:
+    """Size ``start`` within ``flat`` of the crack, path or wall, growing to ``size_far``."""
+    refined = [c for n in ("crack", "fracture_path", "wellbore_wall") for c in groups.get(n, [])]
+    sizing = geom.mesh
+    dist_max = flat + max(sizing.growth_distance(start), 1e-9)
+    if sizing.size_integration == "exact":
+        grading = add_grading(model, 1, refined, start, sizing.size_far, dist_max, 400)
+        use_gradings(model, [grading])
+        return
+    lo, hi = kept_corners(geom.plate.half[:2], geom.symmetry)
+    sampling = int(np.clip(np.ceil(2.0 * float(max(hi - lo)) / start), 50, 2000))
+    grading = add_grading(model, 1, refined, start, sizing.size_far, dist_max, sampling)
+    use_gradings(model, [grading], sizing.size_far)
 
 
 __all__ = [

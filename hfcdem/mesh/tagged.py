@@ -52,6 +52,10 @@ class TaggedMesh:
             known = ", ".join(sorted(self.facet_names)) or "none"
             raise KeyError(f"no facet group named {name!r}; this mesh has: {known}") from None
 
+    def facet_groups(self, prefix: str) -> tuple[str, ...]:
+        """Names of the facet groups that start with ``prefix`` (``"outer"``: every edge)."""
+        return tuple(sorted(n for n in self.facet_names if n.startswith(prefix)))
+
     def facets(self, name: str) -> np.ndarray:
         """Local indices of the facets in group ``name`` (owned and ghost)."""
         return self.facet_tags.find(self.facet_tag(name))

@@ -100,7 +100,7 @@ def build_solid(scene: Scene, tmesh: Any) -> CDEMSolid:
     else:
         zone = None
     rollers = {name: axis for name, axis in ROLLER_AXES.items() if name in names}
-    fixed = tuple(sorted(n for n in names if n.startswith("outer")))
+    fixed = tmesh.facet_groups("outer")
     return CDEMSolid(
         tmesh,
         phys.rock,
