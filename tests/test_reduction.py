@@ -5,12 +5,14 @@ import dolfinx.fem.petsc
 import numpy as np
 import pytest
 import ufl
-from hfcdem.mesh.verification import CrackPlate, create_crack_plate
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.config.geometry import CrackPlate
 from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
+from hfcdem.config.parts import Crack, MeshSizing, Plate
 from hfcdem.io.sampling import evaluate_at_points
+from hfcdem.mesh.build import mesh_geometry
 from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solid.cdem import CDEMSolid, Loads
 from hfcdem.solid.elastic import strain, stress
@@ -127,7 +129,9 @@ def test_nothing_glued_is_the_dg_solution():
 
 
 def crack_solid(alpha):
-    tmesh = create_crack_plate(CrackPlate(A, 50 * A, A / 20, 10 * A), comm)
+    sizing = MeshSizing(A / 20, 10 * A, grading=0.25, size_integration="exact")
+    plate = CrackPlate(Plate(100 * A, 100 * A), Crack(2 * A), sizing, symmetry=("x",))
+    tmesh = mesh_geometry(plate, comm)
     return CDEMSolid(
         tmesh,
         STEEL,
@@ -136,7 +140,7 @@ def crack_solid(alpha):
         zone=None,  # springs on every facet
         degree=1,
         rollers={"symmetry_x": 0},
-        fixed=["outer"],
+        fixed=tmesh.facet_groups("outer"),
     )
 
 
