@@ -184,7 +184,7 @@ class ConvergenceStudy:
         if self.measure == "h":
             return characteristic_size(scene)
         if self.measure == "1/alpha":
-            return 1.0 / scene.physics.rock.spring_factor
+            return 1.0 / scene.physics.interfaces.alpha
         if self.measure is not None:
             return numeric(self.values[k])
         return None
