@@ -42,7 +42,9 @@ Run it, or give the scene and the values on the command line::
         --values "20 mm,10 mm,5 mm" --set 'injection.duration="5 s"' -o DIR
 
 Cases run one at a time, coarse to fine, into ``DIR/case_K_VALUE`` (a case
-already finished there is skipped, as in a parameter study).  Written into DIR
+already finished there is skipped, as in a parameter study).  A case that
+stopped early (``summary.json``'s ``stopped``) is tabled with ``completed`` 0
+and left out of the estimates.  Written into DIR
 (atomically): ``results.csv`` (one row per case), ``convergence.csv`` (per
 answer: the finest value, the extrapolated one, the estimated error, the order
 and the method, e.g. ``two-finest: not monotone``), ``convergence.json`` (both)

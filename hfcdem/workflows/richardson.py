@@ -134,7 +134,7 @@ def extrapolate(h: Sequence[float], f: Sequence[float]) -> Extrapolation:
     f3 = float(fs[2])
     if f1 == f2 == f3:
         return Extrapolation(f1, f1, 0.0, None, RICHARDSON, n)
-    p = observed_order(hs[:3], fs[:3])
+    p = observed_order([float(v) for v in hs[:3]], [float(v) for v in fs[:3]])
     if p is None:
         why = "not monotone" if (f2 - f1) * (f3 - f2) <= 0.0 else "order out of range"
         return Extrapolation(f1, None, two, None, f"{TWO_FINEST}: {why}", n)

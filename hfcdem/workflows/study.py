@@ -189,9 +189,20 @@ def numeric(value: Any) -> float | None:
 class CaseSource(Protocol):
     """What :func:`run_cases` needs of a study: a name, the swept key, values, scenes."""
 
-    name: str
-    parameter: str
-    values: tuple[Any, ...]
+    @property
+    def name(self) -> str:
+        """The study's name."""
+        ...
+
+    @property
+    def parameter(self) -> str:
+        """The swept key."""
+        ...
+
+    @property
+    def values(self) -> tuple[Any, ...]:
+        """The swept values, one case each."""
+        ...
 
     def case_scene(self, k: int) -> Scene:
         """Return the validated scene of case ``k``."""
