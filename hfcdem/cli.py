@@ -149,6 +149,7 @@ def _study(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
     from hfcdem.config.units import FieldError
+    from hfcdem.workflows.convergence import study_kind
     from hfcdem.workflows.study import load_study, run_study
 
     comm = MPI.COMM_WORLD
@@ -156,7 +157,16 @@ def _study(args: argparse.Namespace) -> int:
     say = _printer(comm)
 
     try:
-        study = load_study(args.study)
+        if args.convergence or (args.study and study_kind(args.study) == "convergence"):
+            return _convergence(args, say)
+        if not args.study:
+            say("error: give a study file, or --convergence SCENE.toml", err=True)
+            return 2
+        study = load_study(args.study, args.resolution)
+        if args.values:
+            study = study.with_values(_values(args.values))
+        if args.set:
+            study = study.with_fixed(_overrides(args.set))
         run_study(study, args.output, comm, groups=args.groups, force=args.force, say=say)
     except FieldError as exc:
         say(f"error: {exc}", err=True)
@@ -164,6 +174,53 @@ def _study(args: argparse.Namespace) -> int:
     except ValueError as exc:
         say(f"error: {exc}", err=True)
         return 2
+    return 0
+
+
+def _values(text: str) -> tuple[object, ...]:
+    """Split ``a,b,c``; each item is a TOML value (``100``) or else a string (``10 mm``)."""
+    import tomllib
+
+    out: list[object] = []
+    for item in text.split(","):
+        try:
+            out.append(tomllib.loads(f"v = {item.strip()}")["v"])
+        except tomllib.TOMLDecodeError:
+            out.append(item.strip())
+    return tuple(out)
+
+
+def _convergence(args: argparse.Namespace, say: Any) -> int:
+    """Run a convergence study: a kind = "convergence" file, or --convergence SCENE."""
+    from mpi4py import MPI
+
+    from hfcdem.workflows.convergence import (
+        convergence_study,
+        load_convergence,
+        run_convergence,
+    )
+
+    if args.groups != 1:
+        say("error: a convergence study times its cases: run them one at a time", err=True)
+        return 2
+    values = _values(args.resolutions or args.values) if args.resolutions or args.values else ()
+    if args.convergence:
+        if args.study:
+            say("error: give a study file or --convergence SCENE.toml, not both", err=True)
+            return 2
+        if not values:
+            say("error: --convergence needs --resolutions or --values", err=True)
+            return 2
+        parameter = "resolution" if args.resolutions else args.parameter
+        fixed = _overrides(args.set)
+        study = convergence_study(args.convergence, parameter, values, fixed, args.resolution)
+    else:
+        study = load_convergence(args.study, args.resolution)
+        if values:
+            study = study.with_values(values)
+        if args.set:
+            study = study.with_fixed(_overrides(args.set))
+    run_convergence(study, args.output, MPI.COMM_WORLD, force=args.force, say=say)
     return 0
 
 
@@ -221,10 +278,34 @@ def build_parser() -> argparse.ArgumentParser:
     run.set_defaults(func=_run)
     study = sub.add_parser(
         "study",
-        help="sweep a scene field over values: run the cases, write results.csv and study.png",
+        help="sweep a scene field over values, or run a convergence study (--convergence)",
+        description="Run a study file (kind 'sweep': results.csv and study.png; kind "
+        "'convergence': results.csv, convergence.csv and convergence.png), or a convergence "
+        "study of SCENE.toml over --resolutions or --parameter and --values.",
     )
-    study.add_argument("study", metavar="STUDY.toml")
+    study.add_argument("study", nargs="?", metavar="STUDY.toml")
     study.add_argument("-o", "--output", required=True, metavar="DIR")
+    study.add_argument(
+        "--convergence", metavar="SCENE.toml", help="a convergence study of this scene"
+    )
+    study.add_argument(
+        "--resolutions",
+        metavar="A,B,C",
+        help="named resolutions to converge over, e.g. coarse,default,fine",
+    )
+    study.add_argument(
+        "--parameter",
+        default="resolution",
+        help="with --convergence: the swept key (resolution, geometry.mesh.size, "
+        "rock.spring_factor, solver.time_step, solver.max_time_step, solver.linear_solver)",
+    )
+    study.add_argument(
+        "--values", metavar="A,B,C", help="the swept values (replace a study file's)"
+    )
+    study.add_argument("--resolution", help="the mesh resolution of every case (not swept)")
+    study.add_argument(
+        "--set", action="append", metavar="KEY=VALUE", help="fix a scene field in every case"
+    )
     study.add_argument(
         "--groups", type=int, default=1, help="run this many cases at once (ranks split evenly)"
     )

@@ -61,6 +61,7 @@ def test_bad_study_input_is_named_before_running(shared_tmp_path, study_file):
     _write(bad, study_file.read_text().replace('"1e-3 m3/s"', '"1e-3 m3"'))
     with pytest.raises(SceneError, match=r"injection\.rate"):
         load_study(bad)
+    MPI.COMM_WORLD.barrier()  # every rank has read it before rank 0 rewrites it
     _write(bad, study_file.read_text().replace("[sweep]", "colour = 1\n[sweep]"))
     with pytest.raises(SceneError, match="colour"):
         load_study(bad)

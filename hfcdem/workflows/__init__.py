@@ -2,7 +2,9 @@
 
 ``run`` meshes a scene, builds the solid and the fracture, steps it and writes
 the outputs; ``static`` solves a ``[load]`` scene once; ``study`` sweeps scene
-fields; ``breakdown`` finds the breakdown pressure in a pressure history.
+fields; ``convergence`` runs a scene over resolutions and estimates each
+answer's discretisation error (``richardson``); ``breakdown`` finds the
+breakdown pressure in a pressure history.
 """
 
 __all__: list[str] = []

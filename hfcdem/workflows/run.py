@@ -218,6 +218,7 @@ def run_scene(
             "unknowns": dofs,
             "ranks": comm.size,
             "peak_memory_MB": _peak_memory_mb(comm),
+            "peak_memory_rank_max_MB": _peak_memory_mb(comm, MPI.MAX),
             "wall_time_s": time.perf_counter() - wall0,
             "versions": versions(comm),
             "defaults_used": list(phys.defaulted),
@@ -419,12 +420,16 @@ def _first_crack_pressure(frac: HydraulicFracture) -> float | None:
     return max([*before, frac.settings.initial_pressure]) / 1e6
 
 
-def _peak_memory_mb(comm: MPI.Comm) -> float:
-    """Peak resident memory of all ranks together (MB), from getrusage."""
+def _peak_memory_mb(comm: MPI.Comm, op: MPI.Op = MPI.SUM) -> float:
+    """Peak resident memory of the ranks (MB) from getrusage: their sum, or ``op`` over them.
+
+    The process's high-water mark since it started, so a run after a larger one
+    in the same process reports the larger one's peak.
+    """
     import resource
 
     kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # kB on Linux
-    return float(comm.allreduce(kb, op=MPI.SUM)) / 1024.0
+    return float(comm.allreduce(kb, op=op)) / 1024.0
 
 
 def _first_crack(scene: Scene, frac: HydraulicFracture) -> dict[str, Any] | None:

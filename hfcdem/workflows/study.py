@@ -29,10 +29,10 @@ import dataclasses
 import json
 import re
 import tomllib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from mpi4py import MPI
 
@@ -106,7 +106,13 @@ def load_study(path: str | Path, resolution: str | None = None) -> Study:
         data = tomllib.loads(p.read_text())
     except (OSError, tomllib.TOMLDecodeError) as exc:
         raise SceneError("", f"cannot read study file {p}: {exc}") from None
-    known = {"name", "scene", "resolution", "sweep", "set"}
+    known = {"kind", "name", "scene", "resolution", "sweep", "set"}
+    if data.get("kind", "sweep") != "sweep":
+        raise SceneError(
+            "kind",
+            f"{data.get('kind')!r}: load_study reads kind = 'sweep' studies (a 'convergence' "
+            "study is read by hfcdem.workflows.convergence.load_convergence)",
+        )
     for key in data:
         if key not in known:
             raise SceneError(key, f"unknown key; a study takes: {', '.join(sorted(known))}")
@@ -180,6 +186,29 @@ def numeric(value: Any) -> float | None:
     return None
 
 
+class CaseSource(Protocol):
+    """What :func:`run_cases` needs of a study: a name, the swept key, values, scenes."""
+
+    @property
+    def name(self) -> str:
+        """The study's name."""
+        ...
+
+    @property
+    def parameter(self) -> str:
+        """The swept key."""
+        ...
+
+    @property
+    def values(self) -> tuple[Any, ...]:
+        """The swept values, one case each."""
+        ...
+
+    def case_scene(self, k: int) -> Scene:
+        """Return the validated scene of case ``k``."""
+        ...
+
+
 def run_study(
     study: Study,
     output: str | Path,
@@ -189,17 +218,39 @@ def run_study(
     say: Callable[[str], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Run every case not already done; return one result row per case."""
+    say = say or (lambda msg: None)
+    out = prepare_output_dir(output, comm)
+    run_cases(study, out, comm, groups=groups, force=force)
+    rows = case_rows(study, out)
+    if comm.rank == 0:
+        _write_results(out, study, rows)
+    comm.barrier()
+    say(f"{study.name}: {len(rows)} cases; results in {out}/results.csv and study.png")
+    return rows
+
+
+def run_cases(
+    study: CaseSource,
+    out: Path,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+    groups: int = 1,
+    force: bool = False,
+    order: Sequence[int] | None = None,
+) -> None:
+    """Run the cases of ``study`` into ``out/case_K_VALUE``, skipping those done (collective).
+
+    ``order``: the case indices in the order to run them (default: as listed).
+    ``groups``: run that many cases at once, the ranks split between them.
+    """
     from hfcdem.workflows.run import run_scene, scene_fingerprint
 
     if not 1 <= groups <= comm.size:
         raise ValueError(f"groups must be in [1, {comm.size}] (the rank count), got {groups}")
-    say = say or (lambda msg: None)
-    out = prepare_output_dir(output, comm)
     color = comm.rank % groups
     sub = comm.Split(color, comm.rank)
     try:
-        for k in range(len(study.values)):
-            if k % groups != color:
+        for slot, k in enumerate(range(len(study.values)) if order is None else order):
+            if slot % groups != color:
                 continue
             scene = study.case_scene(k)
             case_dir = out / case_directory(k, study.values[k])
@@ -219,15 +270,15 @@ def run_study(
     finally:
         sub.Free()
     comm.barrier()
+
+
+def case_rows(study: CaseSource, out: Path) -> list[dict[str, Any]]:
+    """Return one row per case: its index, value, numeric value and ``summary.json``."""
     rows = []
     for k, value in enumerate(study.values):
         summary_path = out / case_directory(k, value) / "summary.json"
         summary = json.loads(summary_path.read_text()) if summary_path.exists() else {}
         rows.append({"case": k, "value": value, "x": numeric(value), **summary})
-    if comm.rank == 0:
-        _write_results(out, study, rows)
-    comm.barrier()
-    say(f"{study.name}: {len(rows)} cases; results in {out}/results.csv and study.png")
     return rows
 
 
@@ -351,11 +402,14 @@ def _label_axes(axes: Any, study: Study, rows: list[dict[str, Any]], xs: list, c
 
 __all__ = [
     "STATIC_COLUMNS",
+    "CaseSource",
     "Study",
     "breakdown_text",
     "case_directory",
+    "case_rows",
     "load_study",
     "numeric",
     "pick_metric",
+    "run_cases",
     "run_study",
 ]
