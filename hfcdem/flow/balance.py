@@ -64,6 +64,15 @@ class VoidVolumes:
         """Facet and cavity void volumes at group pressures ``p``."""
         return self.v0.reshape(-1, *([1] * (p.ndim - 1))) + self.h @ p, self.vc0 + self.hc @ p
 
+    def filling_pressure(self, wet: np.ndarray, held: float) -> float | None:
+        """Uniform pressure at which the ``wet`` facets and the cavity hold ``held`` (m^3).
+
+        Compressibility is ignored (a starting guess); None when they do not deform.
+        """
+        stiff = float(self.h[wet].sum() + self.hc.sum())
+        volume = float(self.v0[wet].sum()) + self.vc0
+        return (held - volume) / stiff if stiff > 0 else None
+
 
 @dataclass(frozen=True, eq=False)
 class StepBalance:
