@@ -15,7 +15,13 @@ from dataclasses import dataclass
 import dolfinx
 import numpy as np
 
-from hfcdem.coupling.condense import NetworkView, condense, touching_joints
+from hfcdem.coupling.condense import (
+    NetworkView,
+    closure_offsets,
+    condense,
+    group_volumes,
+    touching_joints,
+)
 from hfcdem.coupling.fluidstate import Key, facet_keys
 from hfcdem.coupling.settings import FlowSettings
 from hfcdem.flow.network import Network, build_network
@@ -125,12 +131,41 @@ def condense_network(
     return condense(solid, cavity, wet_joints, local_group, local_open, group_count(group))
 
 
+def network_volumes(
+    solid: CDEMSolid,
+    network: LocalNetwork,
+    condensed: tuple[dolfinx.fem.Function, list[dolfinx.fem.Function]],
+    residual_aperture: float,
+    cavity_form: dolfinx.fem.Form | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
+    """Void volumes of the network's facets and the cavity, linear in the group pressures.
+
+    ``condensed``: the base state and group responses of :func:`condense_network`.
+    Returns v0, h, hc and the base state's wall motion (see
+    :func:`~hfcdem.coupling.condense.group_volumes`), and the closure stress of
+    every network facet (in-situ normal stress, compression positive).
+    """
+    offsets, closure = closure_offsets(solid, network.view)
+    base, columns = condensed
+    v0, h, hc, wall = group_volumes(
+        solid,
+        network.view,
+        base,
+        columns,
+        offsets,
+        (network.is_open, network.net.area, residual_aperture),
+        cavity_form,
+    )
+    return v0, h, hc, wall, closure
+
+
 __all__ = [
     "LocalNetwork",
     "condense_network",
     "group_count",
     "local_network",
     "near_fluid",
+    "network_volumes",
     "pressure_groups",
     "wall_joints",
 ]

@@ -1,31 +1,19 @@
 """Fluid-driven fracturing: the CDEM solid coupled to flow in its fractures and cavity.
 
-Unknowns and equations (implicit Euler, one step ``dt``):
-
-- The solid is linear between interface events, so its response to fluid
-  pressure is condensed: with the stiffness factorised once per event,
-  ``u = u_base + sum_g p_g u_g`` where ``u_g`` answers a unit pressure on the
-  open facets (and walls) of pressure group ``g``.  The void volume of every
-  fracture facet and the cavity volume are then linear in the group pressures:
-  ``V = V0 + H p``, exactly the work-conjugate of the pressure loads.
-- Fluid content is tracked as volume at the reference density,
-  ``M = V (1 + p / Kw)``.  Each wet group satisfies
-  ``M_g(p) - M_g^n - dt (sum of inflows) - injected + leaked = 0``; fluxes follow
-  the cubic law on the :class:`~hfcdem.flow.network.Network`.
-- Filling (``filling="saturation"``, the seed paper's eqs. (14)-(19)): a dry
-  facet is at zero pressure with saturation ``S = M / V``; it gains fluid from
-  wet neighbours through ``ks = S^2 (3 - 2S)`` and turns wet when full.  With
-  ``filling="no_lag"`` every broken facet joined to the cavity is wet at once.
-- ``fidelity="uniform"`` collapses the cavity and every facet joined to it into
-  one pressure group (one solve per event): the cheap setting for
-  storage/toughness-dominated scenes.
-
-The small nonlinear system of group pressures is solved by PETSc SNES (Newton,
-line search, finite-difference Jacobian).  After each converged step the
-interfaces are checked: contacts that switch, or facets that break, change the
-stiffness, so the operator is rebuilt and the step repeated until nothing
-changes.  The step size adapts: cut on divergence, grown when easy.  Every step
-records mass balance: injected = fluid in cavity + fractures + leaked.
+Implicit Euler steps of the group pressures: the solid, linear between
+interface events, is condensed onto the pressure groups
+(:mod:`~hfcdem.coupling.groups`, :mod:`~hfcdem.coupling.condense`), so void
+volumes are linear in the pressures; each wet group balances its fluid content
+``M = V (1 + p / Kw)`` against cubic-law fluxes, injection and leak-off
+(:mod:`~hfcdem.flow.balance`, solved by SNES in :mod:`~hfcdem.flow.newton`).
+Filling ``"saturation"`` (seed eqs. (14)-(19)) lets dry facets fill through
+``ks = S^2 (3 - 2S)``; ``"no_lag"`` wets every facet joined to the cavity at once;
+fidelity ``"uniform"`` makes the cavity and its joined facets one group.  After
+each converged attempt contacts switch and facets break
+(:mod:`~hfcdem.coupling.events`), the operator is rebuilt and the step repeated
+until nothing changes; :mod:`~hfcdem.coupling.stepping` sizes the steps.  The
+fluid per facet lives in :class:`~hfcdem.coupling.fluidstate.FluidState`; every
+step records mass balance: injected = fluid in cavity + fractures + leaked.
 """
 
 from __future__ import annotations
@@ -45,8 +33,6 @@ from hfcdem.coupling.condense import (
     CondensedSolid,
     cavity_load_form,
     cavity_vertices,
-    closure_offsets,
-    group_volumes,
     mean_point,
     mesh_cavity_volume,
 )
@@ -57,6 +43,7 @@ from hfcdem.coupling.groups import (
     group_count,
     local_network,
     near_fluid,
+    network_volumes,
     pressure_groups,
     wall_joints,
 )
@@ -139,7 +126,7 @@ class HydraulicFracture:
         self._wall_joints = wall_joints(solid, s, self._cavity_vertices)
         self._cav_form = cavity_load_form(solid, s.cavity, self._intact_wall_joints())
         self._cavity_reference: float | None = None
-        self._rebuild()
+        self.rebuild()
         self._initialise_fluid()
 
     @property
@@ -172,14 +159,6 @@ class HydraulicFracture:
         """Per interface facet: True where it holds the cavity's fluid (a wet wall joint)."""
         return self._wall_joints
 
-    def rebuild(self) -> None:
-        """Refactorise the solid and recondense for the current interface states.
-
-        Runs of :meth:`step` call it at every interface event; a benchmark calls it
-        to time one event.
-        """
-        self._rebuild()
-
     def _intact_wall_joints(self) -> np.ndarray:
         return self._wall_joints & (self.solid.state == FacetState.INTACT)
 
@@ -204,12 +183,16 @@ class HydraulicFracture:
     def _recondense(self) -> None:
         """Record the fluid of the network and rebuild it for changed states."""
         self._store_state()
-        self._rebuild()
+        self.rebuild()
 
     # ------------------------------------------------------------ operator
 
-    def _rebuild(self) -> None:
-        """Factorise the solid for the current states and condense it onto the groups."""
+    def rebuild(self) -> None:
+        """Refactorise the solid and recondense for the current interface states.
+
+        Runs of :meth:`step` call it at every interface event; a benchmark calls it
+        to time one event.
+        """
         t0 = time.perf_counter()
         self._rebuild_network()
         s, solid, net = self.settings, self.solid, self.net
@@ -223,15 +206,12 @@ class HydraulicFracture:
         base, columns = condense_network(solid, s.cavity, self.network, self.group, wet_joints)
         if s.cavity:  # the intact joints change with breaks
             self._cav_form = cavity_load_form(solid, s.cavity, wet_joints)
-        offsets, self.closure_stress = closure_offsets(solid, self.view)
         track = self._cav_form is not None and not s.rigid_cavity
-        v0, h, hc, wall = group_volumes(
+        v0, h, hc, wall, self.closure_stress = network_volumes(
             solid,
-            self.view,
-            base,
-            columns,
-            offsets,
-            (self.is_open, net.area, self.fluid.residual_aperture),
+            self.network,
+            (base, columns),
+            self.fluid.residual_aperture,
             self._cav_form if track else None,
         )
         if self._cavity_reference is None:
@@ -255,12 +235,6 @@ class HydraulicFracture:
 
     # ---------------------------------------------------------------- flow
 
-    def _facet_pressure(self, p: np.ndarray) -> np.ndarray:
-        return self.balance.facet_pressure(p)
-
-    def _volumes(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return self.op.volumes.at(p)
-
     def _newton(
         self, dt: float, source: float, leak: np.ndarray, guess: np.ndarray
     ) -> tuple[np.ndarray, int, bool]:
@@ -283,7 +257,7 @@ class HydraulicFracture:
     def _initialise_fluid(self) -> None:
         """Cavity (and no-lag fractures) full at the initial pressure."""
         p = np.full(self.m, self.settings.initial_pressure)
-        vf, vc = self._volumes(p)
+        vf, vc = self.op.volumes.at(p)
         kw = self.fluid.bulk_modulus
         self.cavity_content = float(max(float(vc), 0.0) * (1.0 + p[0] / kw))
         wet = self.group >= 0
@@ -306,7 +280,7 @@ class HydraulicFracture:
 
     def _set_displacement(self, p: np.ndarray) -> Loads:
         self.op.displacement(self.solid.u, p)
-        pf = self._facet_pressure(p)
+        pf = self.balance.facet_pressure(p)
         local = np.zeros(self.solid.num_facets)
         local[self.view.facets] = pf[self.view.positions]
         cavity = {name: float(p[0]) for name in self.settings.cavity}
@@ -366,7 +340,7 @@ class HydraulicFracture:
         self.facet_fluid.restore(saved.fluid)
         self.first_break_time = saved.first_break_time
         if changed:
-            self._rebuild()
+            self.rebuild()
 
     def _try_step(self, dt: float) -> StepRecord | float | None:
         """Attempt a step of ``dt``, repeating it until the interface states settle.
@@ -405,7 +379,7 @@ class HydraulicFracture:
             contact_iterations += 1 if switched else 0
             if switched:
                 continue
-            self._trial_pressure = self._facet_pressure(p)
+            self._trial_pressure = self.balance.facet_pressure(p)
             ratio, mode = solid.overstress(loads)
             ratio = np.where(self._eligible(), ratio, 0.0)
             worst = float(self.comm.allreduce(float(ratio.max(initial=0.0)), op=MPI.MAX))
@@ -447,14 +421,7 @@ class HydraulicFracture:
         s = self.settings
         if not (s.filling == "saturation" and s.fidelity == "viscous"):
             return False
-        pf = self._facet_pressure(p)
-        # (facets that filled during this step may hold suction until it ends)
-        drained = (self.group > 0) & (pf < 0.0) & (self.wet_since < t1)
-        # dry facets that fill during this step join the wet set at once,
-        # so the front is not limited to one facet per step
-        vf, _ = self._volumes(p)
-        gain = self.balance.dry_gain(p, vf, self.content, dt)
-        full = (self.group < 0) & (gain > 0.0) & (self.content + gain >= vf)
+        drained, full = self.balance.wet_changes(p, dt, self.content, self.wet_since < t1)
         if not (drained.any() or full.any()):
             return False
         self._last_change = f"{int(drained.sum())} drained, {int(full.sum())} filled"
@@ -528,7 +495,7 @@ class HydraulicFracture:
         self.t = t1
         self._store_state()
         if fills:
-            self._rebuild()
+            self.rebuild()
         rec = self._record(t1, dt, vf, iterations[0])
         if not (math.isfinite(rec.injection_pressure) and np.all(np.isfinite(self.pressure))):
             raise SimulationStopped(f"non-finite pressure at t = {t1:.6g} s")
@@ -607,17 +574,14 @@ class HydraulicFracture:
     # ------------------------------------------------------------- results
 
     def _last_volumes(self) -> np.ndarray:
-        vf, _ = self._volumes(self._guess())
+        vf, _ = self.op.volumes.at(self._guess())
         return vf
 
     def _saturation(self) -> np.ndarray:
         return fields.saturation(self.wet, self.content, self._last_volumes())
 
     def wet_extent(self, origin: Sequence[float], direction: Sequence[float]) -> float:
-        """Return the fluid front along ``direction`` from ``origin`` (m).
-
-        The far end of the wet facets, plus the filled share of a dry facet beyond.
-        """
+        """Return the fluid front along ``direction`` from ``origin`` (m)."""
         return fields.wet_extent(self.net, self.wet, self._saturation(), origin, direction)
 
     def apertures(self) -> np.ndarray:
@@ -629,21 +593,14 @@ class HydraulicFracture:
         return fields.opening_at_cavity(self._last_volumes(), self.net)
 
     def facet_fields(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """Vertex coordinates and fluid data of this rank's owned network facets.
-
-        See :func:`hfcdem.coupling.fields.facet_fields`.
-        """
+        """Return the fluid data of this rank's network facets (see ``fields.facet_fields``)."""
         sat, aperture = self._saturation(), self.apertures()
         return fields.facet_fields(
             self.solid, self.view, self.pressure, aperture, sat, self.is_open
         )
 
     def interface_fields(self, loads: Loads) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """Vertex coordinates and solid and fluid data of every owned interface facet.
-
-        ``loads`` must be the loads of the solid's current displacement
-        (:meth:`current_loads`); see :func:`hfcdem.coupling.fields.interface_fields`.
-        """
+        """Return the data of every owned interface at :meth:`current_loads` (see ``fields``)."""
         sat, aperture = self._saturation(), self.apertures()
         return fields.interface_fields(self.solid, loads, self.view, self.pressure, aperture, sat)
 
@@ -674,7 +631,7 @@ class HydraulicFracture:
         if history is None:
             history = [StepRecord.from_row(row) for row in data.get("history", [])]
         self.history = list(history)
-        self._rebuild()
+        self.rebuild()
 
     def write_history(self, path: str | os.PathLike[str]) -> None:
         """Write the step records as CSV (rank 0, atomically: a stopped run keeps it)."""

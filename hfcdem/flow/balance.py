@@ -226,6 +226,21 @@ class GroupBalance:
         np.add.at(gain, fb[inner], dt * flux[inner])
         return gain
 
+    def wet_changes(
+        self, p: np.ndarray, dt: float, content: np.ndarray, may_drain: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Facets that drain (wet, below zero pressure) and that fill (dry, full by the end).
+
+        ``may_drain``: facets wet before this step (one that filled during it may
+        hold suction until it ends).  Dry facets that fill during the step join
+        the wet set at once, so the front is not limited to one facet per step.
+        """
+        drained = (self.group > 0) & (self.facet_pressure(p) < 0.0) & may_drain
+        vf, _ = self.volumes.at(p)
+        gain = self.dry_gain(p, vf, content, dt)
+        full = (self.group < 0) & (gain > 0.0) & (content + gain >= vf)
+        return drained, full
+
     def advance(
         self,
         p: np.ndarray,
