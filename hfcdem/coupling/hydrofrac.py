@@ -1,31 +1,19 @@
 """Fluid-driven fracturing: the CDEM solid coupled to flow in its fractures and cavity.
 
-Unknowns and equations (implicit Euler, one step ``dt``):
-
-- The solid is linear between interface events, so its response to fluid
-  pressure is condensed: with the stiffness factorised once per event,
-  ``u = u_base + sum_g p_g u_g`` where ``u_g`` answers a unit pressure on the
-  open facets (and walls) of pressure group ``g``.  The void volume of every
-  fracture facet and the cavity volume are then linear in the group pressures:
-  ``V = V0 + H p``, exactly the work-conjugate of the pressure loads.
-- Fluid content is tracked as volume at the reference density,
-  ``M = V (1 + p / Kw)``.  Each wet group satisfies
-  ``M_g(p) - M_g^n - dt (sum of inflows) - injected + leaked = 0``; fluxes follow
-  the cubic law on the :class:`~hfcdem.flow.network.Network`.
-- Filling (``filling="saturation"``, the seed paper's eqs. (14)-(19)): a dry
-  facet is at zero pressure with saturation ``S = M / V``; it gains fluid from
-  wet neighbours through ``ks = S^2 (3 - 2S)`` and turns wet when full.  With
-  ``filling="no_lag"`` every broken facet joined to the cavity is wet at once.
-- ``fidelity="uniform"`` collapses the cavity and every facet joined to it into
-  one pressure group (one solve per event): the cheap setting for
-  storage/toughness-dominated scenes.
-
-The small nonlinear system of group pressures is solved by PETSc SNES (Newton,
-line search, finite-difference Jacobian).  After each converged step the
-interfaces are checked: contacts that switch, or facets that break, change the
-stiffness, so the operator is rebuilt and the step repeated until nothing
-changes.  The step size adapts: cut on divergence, grown when easy.  Every step
-records mass balance: injected = fluid in cavity + fractures + leaked.
+Implicit Euler steps of the group pressures: the solid, linear between
+interface events, is condensed onto the pressure groups
+(:mod:`~hfcdem.coupling.groups`, :mod:`~hfcdem.coupling.condense`), so void
+volumes are linear in the pressures; each wet group balances its fluid content
+``M = V (1 + p / Kw)`` against cubic-law fluxes, injection and leak-off
+(:mod:`~hfcdem.flow.balance`, solved by SNES in :mod:`~hfcdem.flow.newton`).
+Filling ``"saturation"`` (seed eqs. (14)-(19)) lets dry facets fill through
+``ks = S^2 (3 - 2S)``; ``"no_lag"`` wets every facet joined to the cavity at once;
+fidelity ``"uniform"`` makes the cavity and its joined facets one group.  After
+each converged attempt contacts switch and facets break
+(:mod:`~hfcdem.coupling.events`), the operator is rebuilt and the step repeated
+until nothing changes; :mod:`~hfcdem.coupling.stepping` sizes the steps.  The
+fluid per facet lives in :class:`~hfcdem.coupling.fluidstate.FluidState`; every
+step records mass balance: injected = fluid in cavity + fractures + leaked.
 """
 
 from __future__ import annotations
@@ -34,78 +22,45 @@ import math
 import os
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, fields
-from typing import Any
+from dataclasses import dataclass, field
 
 import numpy as np
 from mpi4py import MPI
 
 from hfcdem.config.materials import Fluid, Injection
+from hfcdem.coupling import fields
+from hfcdem.coupling.checkpoint import SCALARS, checkpoint_data, read_checkpoint
 from hfcdem.coupling.condense import (
     CondensedSolid,
-    NetworkView,
     cavity_load_form,
     cavity_vertices,
-    closure_offsets,
-    condense,
-    group_volumes,
     mean_point,
     mesh_cavity_volume,
-    touching_joints,
 )
+from hfcdem.coupling.events import facets_to_break, switch_contacts
+from hfcdem.coupling.fluidstate import FluidState
+from hfcdem.coupling.groups import (
+    condense_network,
+    group_count,
+    local_network,
+    near_fluid,
+    network_volumes,
+    pressure_groups,
+    wall_joints,
+)
+from hfcdem.coupling.records import SimulationStopped, StepRecord
 from hfcdem.coupling.settings import FlowSettings
 from hfcdem.coupling.stepping import StepController
 from hfcdem.flow.balance import GroupBalance, VoidVolumes, gravity_drive, relative_permeability
-from hfcdem.flow.network import Network, build_network
 from hfcdem.flow.newton import solve_groups
 from hfcdem.io.files import write_csv
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
-from hfcdem.solid.interfaces import FacetState, select_breaking
-from hfcdem.solid.states import OPEN, InterfaceStates
+from hfcdem.solid.interfaces import FacetState
+from hfcdem.solid.states import InterfaceStates
 
 # rounds of contact switches in one step's state loop that may open faces (see _switch_contacts)
 _CONTACT_ROUNDS = 1
-
-
-class SimulationStopped(RuntimeError):
-    """The coupled run could not continue; the history so far is kept."""
-
-
-@dataclass
-class StepRecord:
-    """One accepted time step (SI units, global values)."""
-
-    time: float
-    dt: float
-    injection_pressure: float
-    injected_volume: float
-    cavity_fluid: float
-    fracture_fluid: float
-    fracture_volume: float
-    leaked_volume: float
-    mass_error: float  # |injected - fluid held - leaked| / injected (bookkeeping)
-    volume_mismatch: float  # |fluid held - compressed void volume| / injected (solver)
-    wet_facets: int
-    tensile: int
-    shear: int
-    fracture_degree: float
-    newton_iterations: int
-    rebuilds: int
-    wall_time: float
-
-    def as_row(self) -> dict[str, float]:
-        """Return the record as a flat dict (the columns of history.csv)."""
-        return dict(self.__dict__)
-
-    @classmethod
-    def from_row(cls, row: dict[str, float]) -> StepRecord:
-        """Return the record of a row of history.csv (counts back to integers)."""
-        kinds = {f.name: f.type for f in fields(cls)}
-        values: dict[str, Any] = {
-            k: int(v) if kinds[k] in (int, "int") else float(v) for k, v in row.items()
-        }
-        return cls(**values)
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,9 +69,7 @@ class _Attempt:
 
     states: InterfaceStates
     events: int
-    content: dict[tuple[int, ...], float]
-    wet_since: dict[tuple[int, ...], float]
-    pressure: dict[tuple[int, ...], float]
+    fluid: FluidState
     first_break_time: float | None
     rebuilds: int
 
@@ -166,15 +119,14 @@ class HydraulicFracture:
         self.cavity_volume = (
             s.cavity_volume if s.cavity_volume is not None else mesh_cavity_volume(solid, s.cavity)
         ) + s.extra_volume
-        # fluid state per facet key (survives network rebuilds)
-        self._content: dict[tuple[int, ...], float] = {}
-        self._wet_since: dict[tuple[int, ...], float] = {}
-        self._pressure: dict[tuple[int, ...], float] = {}
+        # the fluid of every facet, by key (survives network rebuilds); the network's
+        # arrays content, wet_since, pressure are its working copy between rebuilds
+        self.facet_fluid = FluidState()
         self.p_cavity = s.initial_pressure
-        self._wall_joints = self._find_wall_joints()
+        self._wall_joints = wall_joints(solid, s, self._cavity_vertices)
         self._cav_form = cavity_load_form(solid, s.cavity, self._intact_wall_joints())
         self._cavity_reference: float | None = None
-        self._rebuild()
+        self.rebuild()
         self._initialise_fluid()
 
     @property
@@ -207,61 +159,16 @@ class HydraulicFracture:
         """Per interface facet: True where it holds the cavity's fluid (a wet wall joint)."""
         return self._wall_joints
 
-    def rebuild(self) -> None:
-        """Refactorise the solid and recondense for the current interface states.
-
-        Runs of :meth:`step` call it at every interface event; a benchmark calls it
-        to time one event.
-        """
-        self._rebuild()
-
-    def _find_wall_joints(self) -> np.ndarray:
-        """Flag the interfaces that share an edge (2D: a vertex) with the cavity wall."""
-        solid = self.solid
-        if not (self.settings.wet_wall_joints and self.settings.cavity):
-            return np.zeros(solid.num_facets, dtype=bool)
-        ids = self._cavity_vertices
-        if self.settings.permeate_joints and getattr(self, "net", None) is not None:
-            feeding = (self.group == 0) & (self.is_open > 0)
-            if feeding.any():
-                ids = np.union1d(ids, self.net.keys[feeding].reshape(-1))
-        return touching_joints(solid, ids)
-
     def _intact_wall_joints(self) -> np.ndarray:
         return self._wall_joints & (self.solid.state == FacetState.INTACT)
 
     # ------------------------------------------------------------- network
 
     def _rebuild_network(self) -> None:
-        solid = self.solid
-        local = np.flatnonzero(solid.state != FacetState.INTACT)
-        owned = local[solid.owned[local]]
-        keys = solid.vertex_ids[owned]  # unsorted: build_network orders ids and coordinates
-        net, _ = build_network(
-            self.comm,
-            keys,
-            solid.areas[owned],
-            solid.vertex_coords[owned],
-            self._cavity_vertices,
-        )
-        self.net: Network = net
-        index = net.index()
-        self._local_fracture = local
-        all_keys = np.sort(solid.vertex_ids[local], axis=1)
-        self._local_pos = np.array(
-            [index[tuple(int(v) for v in k)] for k in all_keys], dtype=np.int64
-        )
-        self._owned_sel = solid.owned[local]
-        self._view = NetworkView(local, self._local_pos, self._owned_sel, net.size)
-        # open (fluid-loaded) facets in network order
-        contact_open = (solid.contact[local] == OPEN).astype(float)
-        self.is_open = self._view.gather(contact_open[self._owned_sel], self.comm) > 0.5
-        self.joined = net.components() == 0
-        keys_t = [tuple(int(v) for v in k) for k in net.keys]
-        self._keys_t = keys_t
-        self.content = np.array([self._content.get(k, 0.0) for k in keys_t])
-        self.wet_since = np.array([self._wet_since.get(k, math.inf) for k in keys_t])
-        self.pressure = np.array([self._pressure.get(k, 0.0) for k in keys_t])
+        self.network = network = local_network(self.solid, self._cavity_vertices)
+        self.net, self.view = network.net, network.view
+        self.is_open, self.joined = network.is_open, network.joined
+        self.content, self.wet_since, self.pressure = self.facet_fluid.on(network.keys)
         # pre-existing cracks joined to the cavity start full (seed 000 pre-opens them)
         at_start = getattr(self, "op", None) is None
         if self.settings.filling == "no_lag" or self.settings.fidelity == "uniform" or at_start:
@@ -269,53 +176,42 @@ class HydraulicFracture:
             self.wet_since[newly] = self.t
             self.pressure[newly] = self.p_cavity
         self.wet = np.isfinite(self.wet_since)
-        if net.size == 0:
-            self.wet = np.zeros(0, dtype=bool)
 
     def _store_state(self) -> None:
-        for i, k in enumerate(self._keys_t):
-            self._content[k] = float(self.content[i])
-            self._wet_since[k] = float(self.wet_since[i])
-            self._pressure[k] = float(self.pressure[i])
+        self.facet_fluid.store(self.network.keys, self.content, self.wet_since, self.pressure)
 
-    def _groups(self) -> np.ndarray:
-        """Pressure group of each facet: 0 the cavity, -1 dry, else 1.."""
-        group = np.full(self.net.size, -1, dtype=np.int64)
-        if self.settings.fidelity == "uniform":
-            group[self.wet] = 0
-        else:
-            group[self.wet] = 1 + np.arange(int(self.wet.sum()))
-        return group
+    def _recondense(self) -> None:
+        """Record the fluid of the network and rebuild it for changed states."""
+        self._store_state()
+        self.rebuild()
 
     # ------------------------------------------------------------ operator
 
-    def _rebuild(self) -> None:
-        """Factorise the solid for the current states and condense it onto the groups."""
+    def rebuild(self) -> None:
+        """Refactorise the solid and recondense for the current interface states.
+
+        Runs of :meth:`step` call it at every interface event; a benchmark calls it
+        to time one event.
+        """
         t0 = time.perf_counter()
         self._rebuild_network()
         s, solid, net = self.settings, self.solid, self.net
-        self.group = self._groups()
+        self.group = pressure_groups(self.wet, s.fidelity == "uniform")
         if s.permeate_joints:
-            self._wall_joints = self._find_wall_joints()
-        m = 1 + (int(self.group.max()) if self.group.size and self.group.max() > 0 else 0)
-        self.m = m
-        local_group = np.full(solid.num_facets, -2, dtype=np.int64)
-        local_group[self._local_fracture] = self.group[self._local_pos]
-        local_open = np.zeros(solid.num_facets, dtype=bool)
-        local_open[self._local_fracture] = self.is_open[self._local_pos]
+            self._wall_joints = wall_joints(
+                solid, s, self._cavity_vertices, self.network, self.group
+            )
+        self.m = group_count(self.group)
         wet_joints = self._intact_wall_joints()
-        base, columns = condense(solid, s.cavity, wet_joints, local_group, local_open, m)
+        base, columns = condense_network(solid, s.cavity, self.network, self.group, wet_joints)
         if s.cavity:  # the intact joints change with breaks
             self._cav_form = cavity_load_form(solid, s.cavity, wet_joints)
-        offsets, self.closure_stress = closure_offsets(solid, self._view)
         track = self._cav_form is not None and not s.rigid_cavity
-        v0, h, hc, wall = group_volumes(
+        v0, h, hc, wall, self.closure_stress = network_volumes(
             solid,
-            self._view,
-            base,
-            columns,
-            offsets,
-            (self.is_open, net.area, self.fluid.residual_aperture),
+            self.network,
+            (base, columns),
+            self.fluid.residual_aperture,
             self._cav_form if track else None,
         )
         if self._cavity_reference is None:
@@ -339,26 +235,6 @@ class HydraulicFracture:
 
     # ---------------------------------------------------------------- flow
 
-    def _facet_pressure(self, p: np.ndarray) -> np.ndarray:
-        return self.balance.facet_pressure(p)
-
-    def _volumes(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return self.op.volumes.at(p)
-
-    def _residual(
-        self,
-        p: np.ndarray,
-        dt: float,
-        source: float,
-        leak: np.ndarray,
-        control: bool = True,
-        frozen: np.ndarray | None = None,
-    ) -> np.ndarray:
-        """Group residuals at the current fluid content (see :class:`GroupBalance`)."""
-        return self.balance.residual(
-            p, dt, source, leak, self.content, self.cavity_content, control, frozen
-        )
-
     def _newton(
         self, dt: float, source: float, leak: np.ndarray, guess: np.ndarray
     ) -> tuple[np.ndarray, int, bool]:
@@ -367,7 +243,9 @@ class HydraulicFracture:
         atol = self.balance.tolerance(self.content, self.cavity_content, source, s.newton_tolerance)
 
         def residual(p: np.ndarray, frozen: np.ndarray | None) -> np.ndarray:
-            return self._residual(p, dt, source, leak, frozen=frozen)
+            return self.balance.residual(
+                p, dt, source, leak, self.content, self.cavity_content, frozen=frozen
+            )
 
         solution = solve_groups(residual, guess, atol, s.max_newton_iterations)
         if solution.failure:
@@ -379,7 +257,7 @@ class HydraulicFracture:
     def _initialise_fluid(self) -> None:
         """Cavity (and no-lag fractures) full at the initial pressure."""
         p = np.full(self.m, self.settings.initial_pressure)
-        vf, vc = self._volumes(p)
+        vf, vc = self.op.volumes.at(p)
         kw = self.fluid.bulk_modulus
         self.cavity_content = float(max(float(vc), 0.0) * (1.0 + p[0] / kw))
         wet = self.group >= 0
@@ -396,18 +274,15 @@ class HydraulicFracture:
             guess[self.group[wet]] = self.pressure[wet]
             return guess
         wet = self.group >= 0
-        volumes = self.op.volumes
-        stiff = float(volumes.h[wet].sum() + volumes.hc.sum())
-        volume = float(volumes.v0[wet].sum()) + volumes.vc0
         held = self.cavity_content + float(self.content[wet].sum()) + added
-        p = (held - volume) / stiff if stiff > 0 else self.p_cavity
-        return np.full(self.m, max(p, self.p_cavity))
+        p = self.op.volumes.filling_pressure(wet, held)
+        return np.full(self.m, self.p_cavity if p is None else max(p, self.p_cavity))
 
     def _set_displacement(self, p: np.ndarray) -> Loads:
         self.op.displacement(self.solid.u, p)
-        pf = self._facet_pressure(p)
+        pf = self.balance.facet_pressure(p)
         local = np.zeros(self.solid.num_facets)
-        local[self._local_fracture] = pf[self._local_pos]
+        local[self.view.facets] = pf[self.view.positions]
         cavity = {name: float(p[0]) for name in self.settings.cavity}
         joints = np.where(self._intact_wall_joints(), float(p[0]), 0.0)
         return Loads(cavity=cavity, crack_pressure=local, joint_pressure=joints)
@@ -422,13 +297,7 @@ class HydraulicFracture:
         if len(pressure) != self.net.size:
             pressure = self.pressure
         pressurised = self.wet & (pressure > self.closure_stress)
-        wet_ids = (
-            np.unique(self.net.keys[pressurised].reshape(-1))
-            if self.net.size
-            else np.zeros(0, np.int64)
-        )
-        ids = np.union1d(wet_ids, self._cavity_vertices)
-        return np.asarray(np.isin(solid.vertex_ids, ids).any(axis=1), dtype=bool)
+        return near_fluid(solid, self.net, pressurised, self._cavity_vertices)
 
     def step(self) -> StepRecord:
         """Advance one accepted time step (cutting the step on failure)."""
@@ -458,9 +327,7 @@ class HydraulicFracture:
         return _Attempt(
             states=solid.states.copy(),
             events=len(solid.events),
-            content=dict(self._content),
-            wet_since=dict(self._wet_since),
-            pressure=dict(self._pressure),
+            fluid=self.facet_fluid.copy(),
             first_break_time=self.first_break_time,
             rebuilds=self.rebuilds,
         )
@@ -470,11 +337,10 @@ class HydraulicFracture:
         changed = self.rebuilds != saved.rebuilds
         solid.states.restore(saved.states)
         del solid.events[saved.events :]
-        self._content, self._wet_since = saved.content, saved.wet_since
-        self._pressure = saved.pressure
+        self.facet_fluid.restore(saved.fluid)
         self.first_break_time = saved.first_break_time
         if changed:
-            self._rebuild()
+            self.rebuild()
 
     def _try_step(self, dt: float) -> StepRecord | float | None:
         """Attempt a step of ``dt``, repeating it until the interface states settle.
@@ -513,7 +379,7 @@ class HydraulicFracture:
             contact_iterations += 1 if switched else 0
             if switched:
                 continue
-            self._trial_pressure = self._facet_pressure(p)
+            self._trial_pressure = self.balance.facet_pressure(p)
             ratio, mode = solid.overstress(loads)
             ratio = np.where(self._eligible(), ratio, 0.0)
             worst = float(self.comm.allreduce(float(ratio.max(initial=0.0)), op=MPI.MAX))
@@ -555,68 +421,36 @@ class HydraulicFracture:
         s = self.settings
         if not (s.filling == "saturation" and s.fidelity == "viscous"):
             return False
-        pf = self._facet_pressure(p)
-        # (facets that filled during this step may hold suction until it ends)
-        drained = (self.group > 0) & (pf < 0.0) & (self.wet_since < t1)
-        # dry facets that fill during this step join the wet set at once,
-        # so the front is not limited to one facet per step
-        vf, _ = self._volumes(p)
-        gain = self.balance.dry_gain(p, vf, self.content, dt)
-        full = (self.group < 0) & (gain > 0.0) & (self.content + gain >= vf)
+        drained, full = self.balance.wet_changes(p, dt, self.content, self.wet_since < t1)
         if not (drained.any() or full.any()):
             return False
         self._last_change = f"{int(drained.sum())} drained, {int(full.sum())} filled"
         self.wet_since[drained] = math.inf
         self.wet_since[full] = t1
         self.wet = np.isfinite(self.wet_since)
-        self._store_state()
-        self._rebuild()
+        self._recondense()
         return True
 
     def _switch_contacts(self, loads: Loads, rounds: int) -> int:
-        """Switch contacts at ``loads``; return the global number switched (0: settled).
-
-        Contact chatter (a facet that keeps opening and closing under the same
-        pressure) is cut off: after one round of switches only closings are
-        allowed, so the loop ends, and no face is left open while its blocks
-        interpenetrate (an open face has only the residual stiffness: a block it
-        frees would fly).  An opening held back waits one step.  (Two rounds cost
-        No. 2 coarse 34 more rebuilds for the same breakdown to 10 digits.)
-        """
-        solid = self.solid
-        saved = solid.states.copy()
-        switched = solid.update_contact(loads)
-        if switched and rounds >= _CONTACT_ROUNDS:
-            keep = ~((saved.contact == OPEN) & (solid.contact != OPEN))
-            solid.contact[keep] = saved.contact[keep]
-            solid.friction_traction[keep] = saved.friction_traction[keep]
-            changed = np.count_nonzero((solid.contact != saved.contact) & solid.owned)
-            switched = int(self.comm.allreduce(int(changed), op=MPI.SUM))
+        """Switch contacts (only closings after the first round); return how many switched."""
+        switched = switch_contacts(self.solid, loads, rounds >= _CONTACT_ROUNDS)
         if switched:
             self._last_change = f"{switched} contacts switched"
-            solid.sync_ghost_states()
-            self._store_state()
-            self._rebuild()
+            self._recondense()
         return switched
 
     def _break(self, ratio: np.ndarray, mode: np.ndarray, t1: float) -> bool:
         """Break the facets the rule picks from ``ratio``; return whether any broke."""
-        s, solid = self.settings, self.solid
-        if s.max_breaks_per_iteration is None:
-            rule, cap = solid.model.break_rule, solid.model.max_breaks
-        else:  # fewer new fluid cells per solve keep Newton in its basin
-            rule, cap = "cap", s.max_breaks_per_iteration
-        chosen = select_breaking(ratio, solid.midpoints, rule, cap, self.comm)
+        chosen = facets_to_break(self.solid, ratio, self.settings.max_breaks_per_iteration)
         nbreak = self.comm.allreduce(len(chosen), op=MPI.SUM)
         if not nbreak:
             return False
         self.stepper.broke()
         self._last_change = f"{nbreak} broke"
-        solid.break_facets(chosen, mode[chosen], t1)
+        self.solid.break_facets(chosen, mode[chosen], t1)
         if self.first_break_time is None:
             self.first_break_time = t1
-        self._store_state()
-        self._rebuild()
+        self._recondense()
         return True
 
     def _leak(self, t1: float) -> np.ndarray:
@@ -661,7 +495,7 @@ class HydraulicFracture:
         self.t = t1
         self._store_state()
         if fills:
-            self._rebuild()
+            self.rebuild()
         rec = self._record(t1, dt, vf, iterations[0])
         if not (math.isfinite(rec.injection_pressure) and np.all(np.isfinite(self.pressure))):
             raise SimulationStopped(f"non-finite pressure at t = {t1:.6g} s")
@@ -734,89 +568,56 @@ class HydraulicFracture:
             self.dt = min(self.dt, t_end - self.t)
             rec = self.step()
             if self.progress is not None:
-                elapsed = rec.wall_time
-                eta = elapsed / rec.time * (t_end - rec.time) if rec.time > 0 else math.nan
-                self.progress(
-                    f"t {rec.time:9.4g} s  p {rec.injection_pressure / 1e6:9.4f} MPa  "
-                    f"broken {rec.tensile + rec.shear:5d}  wet {rec.wet_facets:5d}  "
-                    f"dt {rec.dt:8.3g} s  wall {elapsed:7.1f} s  eta {eta:7.1f} s"
-                )
+                self.progress(rec.progress_line(t_end))
         return self.history
 
     # ------------------------------------------------------------- results
 
-    def wet_extent(self, origin: Sequence[float], direction: Sequence[float]) -> float:
-        """Return the fluid front along ``direction`` from ``origin`` (m).
+    def _last_volumes(self) -> np.ndarray:
+        vf, _ = self.op.volumes.at(self._guess())
+        return vf
 
-        The far end of the wet facets, plus the filled share of a dry facet beyond.
-        """
-        o = np.zeros(3)
-        o[: len(origin)] = origin
-        d = np.zeros(3)
-        d[: len(direction)] = direction
-        d /= np.linalg.norm(d)
-        if not self.wet.any():
-            return 0.0
-        proj = (self.net.centroid - o) @ d
-        half = 0.5 * self.net.area  # 2D: facet length
-        reach = float(np.max(proj[self.wet] + half[self.wet]))
-        dry = ~self.wet
-        if dry.any():
-            vf, _ = self._volumes(self._guess())
-            sat = np.clip(self.content / np.maximum(vf, 1e-300), 0.0, 1.0)
-            ahead = dry & (np.abs(proj - half - reach) < 1e-6 * max(reach, 1.0))
-            if ahead.any():
-                reach += float(np.max(sat[ahead] * 2 * half[ahead]))
-        return reach
+    def _saturation(self) -> np.ndarray:
+        return fields.saturation(self.wet, self.content, self._last_volumes())
+
+    def wet_extent(self, origin: Sequence[float], direction: Sequence[float]) -> float:
+        """Return the fluid front along ``direction`` from ``origin`` (m)."""
+        return fields.wet_extent(self.net, self.wet, self._saturation(), origin, direction)
+
+    def apertures(self) -> np.ndarray:
+        """Hydraulic aperture of every network facet (m): never negative."""
+        return fields.apertures(self._last_volumes(), self.net.area, self.fluid.residual_aperture)
+
+    def opening_at_cavity(self) -> float:
+        """Mean opening of the facets that touch the cavity or injection point (m)."""
+        return fields.opening_at_cavity(self._last_volumes(), self.net)
+
+    def facet_fields(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Return the fluid data of this rank's network facets (see ``fields.facet_fields``)."""
+        sat, aperture = self._saturation(), self.apertures()
+        return fields.facet_fields(
+            self.solid, self.view, self.pressure, aperture, sat, self.is_open
+        )
+
+    def interface_fields(self, loads: Loads) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """Return the data of every owned interface at :meth:`current_loads` (see ``fields``)."""
+        sat, aperture = self._saturation(), self.apertures()
+        return fields.interface_fields(self.solid, loads, self.view, self.pressure, aperture, sat)
+
+    def current_loads(self) -> Loads:
+        """Set the solid's displacement to the last accepted state; return its loads."""
+        return self._set_displacement(self._guess())
 
     # ------------------------------------------------------------ checkpoints
-
-    _SCALARS = (
-        "t",
-        "dt",
-        "injected",
-        "leaked",
-        "cavity_content",
-        "p_cavity",
-        "initial_fluid",
-        "first_break_time",
-        "_last_ratio",
-        "initial_failures",
-        "rebuilds",
-        "rebuild_seconds",
-    )
 
     def checkpoint(self) -> dict:
         """Return the state to continue from (the same on every rank, JSON-ready).
 
-        Interfaces are keyed by their global vertex ids, so a run may resume on
-        another number of ranks.
+        Interfaces and fluid are keyed by global vertex ids, so a run may resume
+        on another number of ranks (:mod:`~hfcdem.coupling.checkpoint`).
         """
-        solid = self.solid
-        sel = np.flatnonzero((solid.state != FacetState.INTACT) & solid.owned)
-        rows = [
-            [
-                sorted(int(v) for v in solid.vertex_ids[i]),
-                int(solid.state[i]),
-                int(solid.contact[i]),
-                [float(x) for x in solid.friction_traction[i]],
-            ]
-            for i in sel
-        ]
-        facets = [r for part in self.comm.allgather(rows) for r in part]
-
-        def table(d: dict) -> list:
-            return [[list(k), v] for k, v in sorted(d.items())]
-
-        return {
-            "scalars": {k: getattr(self, k) for k in self._SCALARS},
-            "interfaces": sorted(facets),
-            "content": table(self._content),
-            "wet_since": [
-                [k, (v if math.isfinite(v) else None)] for k, v in table(self._wet_since)
-            ],
-            "pressure": table(self._pressure),
-        }
+        scalars = {k: getattr(self, k) for k in SCALARS}
+        return checkpoint_data(scalars, self.solid, self.facet_fluid)
 
     def restore(self, data: dict, history: list[StepRecord] | None = None) -> None:
         """Continue from a :meth:`checkpoint` (collective), with the ``history`` so far.
@@ -824,103 +625,19 @@ class HydraulicFracture:
         The checkpoint holds the state only; the step records come from
         ``history.csv`` (or an older checkpoint's ``history``).
         """
-        solid = self.solid
-        ids = np.sort(np.asarray(solid.vertex_ids, dtype=np.int64), axis=1)
-        local: dict[tuple[int, ...], int] = {
-            tuple(int(v) for v in ids[i]): i for i in range(len(ids))
-        }
-        for key, state, contact, friction in data["interfaces"]:
-            i = local.get(tuple(key))
-            if i is not None:
-                solid.state[i] = state
-                solid.contact[i] = contact
-                solid.friction_traction[i] = friction
-        for k, v in data["scalars"].items():
+        scalars, self.facet_fluid = read_checkpoint(data, self.solid)
+        for k, v in scalars.items():
             setattr(self, k, v)
-        self._content = {tuple(k): float(v) for k, v in data["content"]}
-        self._wet_since = {
-            tuple(k): (math.inf if v is None else float(v)) for k, v in data["wet_since"]
-        }
-        self._pressure = {tuple(k): float(v) for k, v in data["pressure"]}
         if history is None:
             history = [StepRecord.from_row(row) for row in data.get("history", [])]
         self.history = list(history)
-        self._rebuild()
+        self.rebuild()
 
     def write_history(self, path: str | os.PathLike[str]) -> None:
         """Write the step records as CSV (rank 0, atomically: a stopped run keeps it)."""
-        fields = list(StepRecord.__dataclass_fields__)
-        rows = [[float(getattr(r, k)) for k in fields] for r in self.history]
-        write_csv(path, fields, rows, self.comm)
-
-    def facet_fields(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """Vertex coordinates (F, nv, 3) and per-facet fluid data of this rank's owned facets.
-
-        Data: fluid pressure (MPa), hydraulic aperture (m), saturation, failure
-        state (1 tensile, 2 shear), open (1) or closed (0); for
-        :func:`hfcdem.io.files.write_interfaces`.
-        """
-        sel = self._owned_sel
-        pos = self._local_pos[sel]
-        facets = self._local_fracture[sel]
-        vf, _ = self._volumes(self._guess())
-        sat = np.where(self.wet, 1.0, np.clip(self.content / np.maximum(vf, 1e-300), 0.0, 1.0))
-        data = {
-            "fluid_pressure_MPa": self.pressure[pos] / 1e6,
-            "aperture_m": self.apertures()[pos],
-            "saturation": sat[pos],
-            "state": self.solid.state[facets].astype(float),
-            "open": self.is_open[pos].astype(float),
-        }
-        return self.solid.vertex_coords[facets], data
-
-    def interface_fields(self, loads: Loads) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """Vertex coordinates (F, nv, 3) and data of every owned interface facet.
-
-        Data: failure state (0 intact, 1 tensile, 2 shear), mechanical opening (m),
-        normal traction (MPa, tension positive), and the fluid's pressure (MPa),
-        saturation and hydraulic aperture (m), zero where no fluid cell is.
-        ``loads`` must be the loads of the solid's current displacement.
-        """
-        solid = self.solid
-        snap = solid.snapshot(loads)
-        n = solid.num_facets
-        pressure, saturation, aperture = np.zeros(n), np.zeros(n), np.zeros(n)
-        if self.net.size:
-            vf, _ = self._volumes(self._guess())
-            sat = np.where(self.wet, 1.0, np.clip(self.content / np.maximum(vf, 1e-300), 0.0, 1.0))
-            loc, pos = self._local_fracture, self._local_pos
-            pressure[loc] = self.pressure[pos] / 1e6
-            saturation[loc] = sat[pos]
-            aperture[loc] = self.apertures()[pos]
-        own = solid.owned
-        data = {
-            "state": solid.state[own].astype(float),
-            "opening_m": snap.opening[own],
-            "normal_traction_MPa": snap.normal_traction[own] / 1e6,
-            "fluid_pressure_MPa": pressure[own],
-            "saturation": saturation[own],
-            "aperture_m": aperture[own],
-        }
-        return solid.vertex_coords[own], data
-
-    def current_loads(self) -> Loads:
-        """Set the solid's displacement to the last accepted state; return its loads."""
-        return self._set_displacement(self._guess())
-
-    def apertures(self) -> np.ndarray:
-        """Hydraulic aperture of every network facet (m): never negative."""
-        vf, _ = self._volumes(self._guess())
-        w = np.maximum(vf / np.maximum(self.net.area, 1e-300) - self.fluid.residual_aperture, 0.0)
-        return w + self.fluid.residual_aperture
-
-    def opening_at_cavity(self) -> float:
-        """Mean opening of the facets that touch the cavity or injection point (m)."""
-        touch = self.net.touches_cavity
-        if not touch.any():
-            return 0.0
-        vf, _ = self._volumes(self._guess())
-        return float(np.sum(vf[touch]) / np.sum(self.net.area[touch]))
+        names = list(StepRecord.__dataclass_fields__)
+        rows = [[float(getattr(r, k)) for k in names] for r in self.history]
+        write_csv(path, names, rows, self.comm)
 
 
 __all__ = [

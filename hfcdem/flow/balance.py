@@ -64,6 +64,15 @@ class VoidVolumes:
         """Facet and cavity void volumes at group pressures ``p``."""
         return self.v0.reshape(-1, *([1] * (p.ndim - 1))) + self.h @ p, self.vc0 + self.hc @ p
 
+    def filling_pressure(self, wet: np.ndarray, held: float) -> float | None:
+        """Uniform pressure at which the ``wet`` facets and the cavity hold ``held`` (m^3).
+
+        Compressibility is ignored (a starting guess); None when they do not deform.
+        """
+        stiff = float(self.h[wet].sum() + self.hc.sum())
+        volume = float(self.v0[wet].sum()) + self.vc0
+        return (held - volume) / stiff if stiff > 0 else None
+
 
 @dataclass(frozen=True, eq=False)
 class StepBalance:
@@ -216,6 +225,21 @@ class GroupBalance:
         np.add.at(gain, fa, -dt * flux)
         np.add.at(gain, fb[inner], dt * flux[inner])
         return gain
+
+    def wet_changes(
+        self, p: np.ndarray, dt: float, content: np.ndarray, may_drain: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Facets that drain (wet, below zero pressure) and that fill (dry, full by the end).
+
+        ``may_drain``: facets wet before this step (one that filled during it may
+        hold suction until it ends).  Dry facets that fill during the step join
+        the wet set at once, so the front is not limited to one facet per step.
+        """
+        drained = (self.group > 0) & (self.facet_pressure(p) < 0.0) & may_drain
+        vf, _ = self.volumes.at(p)
+        gain = self.dry_gain(p, vf, content, dt)
+        full = (self.group < 0) & (gain > 0.0) & (content + gain >= vf)
+        return drained, full
 
     def advance(
         self,

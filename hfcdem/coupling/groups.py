@@ -1,0 +1,171 @@
+"""The fracture network on this rank, its pressure groups, and the wet joints beside it.
+
+Rebuilt at every interface event: the broken facets form the
+:class:`~hfcdem.flow.network.Network` (the same on every rank), each wet facet
+is a pressure group of its own (or one with the cavity under uniform
+fidelity), and the solid is condensed onto those groups
+(:func:`condense_network`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import dolfinx
+import numpy as np
+
+from hfcdem.coupling.condense import (
+    NetworkView,
+    closure_offsets,
+    condense,
+    group_volumes,
+    touching_joints,
+)
+from hfcdem.coupling.fluidstate import Key, facet_keys
+from hfcdem.coupling.settings import FlowSettings
+from hfcdem.flow.network import Network, build_network
+from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solid.interfaces import FacetState
+from hfcdem.solid.states import OPEN
+
+
+@dataclass(frozen=True, eq=False)
+class LocalNetwork:
+    """The network of all broken facets, and where they are among this rank's interfaces."""
+
+    net: Network
+    view: NetworkView
+    keys: list[Key]  # facet keys in network order
+    is_open: np.ndarray  # open (fluid-loaded) facets, network order
+    joined: np.ndarray  # facets joined to the cavity, network order
+
+
+def local_network(solid: CDEMSolid, cavity_vertices: np.ndarray) -> LocalNetwork:
+    """Build the network of the solid's broken facets (collective)."""
+    comm = solid.comm
+    local = np.flatnonzero(solid.state != FacetState.INTACT)
+    owned = local[solid.owned[local]]
+    net, _ = build_network(
+        comm,
+        solid.vertex_ids[owned],  # unsorted: build_network orders ids and coordinates
+        solid.areas[owned],
+        solid.vertex_coords[owned],
+        cavity_vertices,
+    )
+    index = net.index()
+    positions = np.array([index[k] for k in facet_keys(solid.vertex_ids[local])], dtype=np.int64)
+    owned_sel = solid.owned[local]
+    view = NetworkView(local, positions, owned_sel, net.size)
+    contact_open = (solid.contact[local] == OPEN).astype(float)
+    is_open = view.gather(contact_open[owned_sel], comm) > 0.5
+    return LocalNetwork(net, view, facet_keys(net.keys), is_open, net.components() == 0)
+
+
+def pressure_groups(wet: np.ndarray, uniform: bool) -> np.ndarray:
+    """Pressure group of each facet: 0 the cavity, -1 dry, else 1, 2, .. in order.
+
+    ``uniform``: every wet facet shares the cavity's group 0.
+    """
+    group = np.full(len(wet), -1, dtype=np.int64)
+    if uniform:
+        group[wet] = 0
+    else:
+        group[wet] = 1 + np.arange(int(wet.sum()))
+    return group
+
+
+def group_count(group: np.ndarray) -> int:
+    """Return the number of pressure groups (the cavity's group 0 always counts)."""
+    return 1 + (int(group.max()) if group.size and group.max() > 0 else 0)
+
+
+def wall_joints(
+    solid: CDEMSolid,
+    settings: FlowSettings,
+    cavity_vertices: np.ndarray,
+    network: LocalNetwork | None = None,
+    group: np.ndarray | None = None,
+) -> np.ndarray:
+    """Flag the interfaces that share an edge (2D: a vertex) with the cavity wall.
+
+    With ``permeate_joints``, also those along the open facets of the cavity's
+    group 0 in ``network`` (``group`` per network facet).
+    """
+    if not (settings.wet_wall_joints and settings.cavity):
+        return np.zeros(solid.num_facets, dtype=bool)
+    ids = cavity_vertices
+    if settings.permeate_joints and network is not None and group is not None:
+        feeding = (group == 0) & (network.is_open > 0)
+        if feeding.any():
+            ids = np.union1d(ids, network.net.keys[feeding].reshape(-1))
+    return touching_joints(solid, ids)
+
+
+def near_fluid(
+    solid: CDEMSolid, net: Network, pressurised: np.ndarray, cavity_vertices: np.ndarray
+) -> np.ndarray:
+    """Interfaces touching a ``pressurised`` network facet or the cavity (a vertex shared)."""
+    wet_ids = np.unique(net.keys[pressurised].reshape(-1)) if net.size else np.zeros(0, np.int64)
+    ids = np.union1d(wet_ids, cavity_vertices)
+    return np.asarray(np.isin(solid.vertex_ids, ids).any(axis=1), dtype=bool)
+
+
+def condense_network(
+    solid: CDEMSolid,
+    cavity: Sequence[str],
+    network: LocalNetwork,
+    group: np.ndarray,
+    wet_joints: np.ndarray,
+) -> tuple[dolfinx.fem.Function, list[dolfinx.fem.Function]]:
+    """Condense the solid onto the pressure ``group`` of each network facet.
+
+    Returns the base state and one unit-pressure response per group (see
+    :func:`~hfcdem.coupling.condense.condense`).
+    """
+    view = network.view
+    local_group = np.full(solid.num_facets, -2, dtype=np.int64)
+    local_group[view.facets] = group[view.positions]
+    local_open = np.zeros(solid.num_facets, dtype=bool)
+    local_open[view.facets] = network.is_open[view.positions]
+    return condense(solid, cavity, wet_joints, local_group, local_open, group_count(group))
+
+
+def network_volumes(
+    solid: CDEMSolid,
+    network: LocalNetwork,
+    condensed: tuple[dolfinx.fem.Function, list[dolfinx.fem.Function]],
+    residual_aperture: float,
+    cavity_form: dolfinx.fem.Form | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
+    """Void volumes of the network's facets and the cavity, linear in the group pressures.
+
+    ``condensed``: the base state and group responses of :func:`condense_network`.
+    Returns v0, h, hc and the base state's wall motion (see
+    :func:`~hfcdem.coupling.condense.group_volumes`), and the closure stress of
+    every network facet (in-situ normal stress, compression positive).
+    """
+    offsets, closure = closure_offsets(solid, network.view)
+    base, columns = condensed
+    v0, h, hc, wall = group_volumes(
+        solid,
+        network.view,
+        base,
+        columns,
+        offsets,
+        (network.is_open, network.net.area, residual_aperture),
+        cavity_form,
+    )
+    return v0, h, hc, wall, closure
+
+
+__all__ = [
+    "LocalNetwork",
+    "condense_network",
+    "group_count",
+    "local_network",
+    "near_fluid",
+    "network_volumes",
+    "pressure_groups",
+    "wall_joints",
+]

@@ -1,0 +1,60 @@
+"""What a coupled run reports: one :class:`StepRecord` per accepted step, or a stop."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+
+class SimulationStopped(RuntimeError):
+    """The coupled run could not continue; the history so far is kept."""
+
+
+@dataclass
+class StepRecord:
+    """One accepted time step (SI units, global values)."""
+
+    time: float
+    dt: float
+    injection_pressure: float
+    injected_volume: float
+    cavity_fluid: float
+    fracture_fluid: float
+    fracture_volume: float
+    leaked_volume: float
+    mass_error: float  # |injected - fluid held - leaked| / injected (bookkeeping)
+    volume_mismatch: float  # |fluid held - compressed void volume| / injected (solver)
+    wet_facets: int
+    tensile: int
+    shear: int
+    fracture_degree: float
+    newton_iterations: int
+    rebuilds: int
+    wall_time: float
+
+    def as_row(self) -> dict[str, float]:
+        """Return the record as a flat dict (the columns of history.csv)."""
+        return dict(self.__dict__)
+
+    def progress_line(self, t_end: float) -> str:
+        """One line of progress, with the wall time left until ``t_end`` at this pace."""
+        elapsed = self.wall_time
+        eta = elapsed / self.time * (t_end - self.time) if self.time > 0 else math.nan
+        return (
+            f"t {self.time:9.4g} s  p {self.injection_pressure / 1e6:9.4f} MPa  "
+            f"broken {self.tensile + self.shear:5d}  wet {self.wet_facets:5d}  "
+            f"dt {self.dt:8.3g} s  wall {elapsed:7.1f} s  eta {eta:7.1f} s"
+        )
+
+    @classmethod
+    def from_row(cls, row: dict[str, float]) -> StepRecord:
+        """Return the record of a row of history.csv (counts back to integers)."""
+        kinds = {f.name: f.type for f in fields(cls)}
+        values: dict[str, Any] = {
+            k: int(v) if kinds[k] in (int, "int") else float(v) for k, v in row.items()
+        }
+        return cls(**values)
+
+
+__all__ = ["SimulationStopped", "StepRecord"]
