@@ -25,9 +25,9 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.config.geometry import BoreholeSquare, CrackPlate
 from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
 from hfcdem.config.parts import Crack, MeshSizing, Plate, Wellbore
+from hfcdem.config.plates import BoreholeSquare, CrackPlate
 from hfcdem.io.sampling import evaluate_at_points
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.mesh.penny import PennyBlock, create_penny_block

@@ -22,9 +22,9 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
-from hfcdem.config.geometry import KGDStrip
 from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
 from hfcdem.config.parts import Crack, MeshSizing, Plate
+from hfcdem.config.plates import KGDStrip
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid

@@ -16,9 +16,9 @@ import time
 import numpy as np
 from mpi4py import MPI
 
-from hfcdem.config.geometry import BoreholeSquare
 from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
 from hfcdem.config.parts import MeshSizing, Plate, Wellbore
+from hfcdem.config.plates import BoreholeSquare
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid

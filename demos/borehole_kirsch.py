@@ -29,9 +29,9 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.config.geometry import BoreholeSquare
 from hfcdem.config.materials import ElasticMaterial, InSituStress
 from hfcdem.config.parts import MeshSizing, Plate, Wellbore
+from hfcdem.config.plates import BoreholeSquare
 from hfcdem.info import versions
 from hfcdem.io.files import prepare_output_dir, write_csv, write_fields, write_json
 from hfcdem.io.plots import plot_lines, render_field

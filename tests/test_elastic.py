@@ -5,9 +5,9 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.config.geometry import BoreholeSquare
 from hfcdem.config.materials import ElasticMaterial, InSituStress
 from hfcdem.config.parts import MeshSizing, Plate, Wellbore
+from hfcdem.config.plates import BoreholeSquare
 from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.elastic import solve_cavity_pressure

@@ -11,9 +11,9 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
-from hfcdem.config.geometry import BoreholeSquare, KGDStrip
 from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
 from hfcdem.config.parts import Crack, MeshSizing, Plate, Wellbore
+from hfcdem.config.plates import BoreholeSquare, KGDStrip
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
 from hfcdem.flow.fluid import CarterLeakOff
 from hfcdem.mesh.build import mesh_geometry

@@ -8,9 +8,9 @@ import ufl
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.config.geometry import CrackPlate
 from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
 from hfcdem.config.parts import Crack, MeshSizing, Plate
+from hfcdem.config.plates import CrackPlate
 from hfcdem.io.sampling import evaluate_at_points
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.mesh.tagged import TaggedMesh

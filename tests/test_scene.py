@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from hfcdem.config import catalogue
-from hfcdem.config.geometry import BoreholeSquare, CrackPlate, KGDStrip, PerforatedBlock
+from hfcdem.config.geometry import PerforatedBlock
 from hfcdem.config.parts import MeshSizing, Profile, TunnelZone, tunnel_extension
+from hfcdem.config.plates import BoreholeSquare, CrackPlate, KGDStrip
 from hfcdem.config.scene import load_scene, parse_geometry, parse_scene
 from hfcdem.config.tables import SceneError
 

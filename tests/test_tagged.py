@@ -6,8 +6,8 @@ import pytest
 import ufl
 from mpi4py import MPI
 
-from hfcdem.config.geometry import BoreholeSquare
 from hfcdem.config.parts import MeshSizing, Plate, Wellbore
+from hfcdem.config.plates import BoreholeSquare
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.mesh.tagged import MeshingError, mesh_from_gmsh
 

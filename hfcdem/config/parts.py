@@ -9,7 +9,7 @@ geometries and checks how they fit together.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -451,8 +451,64 @@ class Crack:
                 )
 
 
+# --- shared by the block and the plates (hfcdem.config.geometry, hfcdem.config.plates)
+
+MAX_CELLS = 2.0e7  # estimated cell counts above this are refused as absurd
+
+
+def estimate_cells(
+    sizing: MeshSizing,
+    volume: float,
+    refined: Sequence[tuple[float, Callable[[np.ndarray], np.ndarray]]],
+    dim: int,
+) -> float:
+    """Rough cell count: sum over refined walls of the integral of area(rho) / h(rho)^dim.
+
+    ``refined`` holds (wall size, measure of the offset surface at distance rho).
+    Regular tetrahedra fill h^3 / 8.5, triangles 0.43 h^2.
+    """
+    per = 8.5 if dim == 3 else 2.3
+    total = per * volume / sizing.size_far**dim
+    for start, measure in refined:
+        rho = np.linspace(0.0, sizing.growth_distance(start), 400)
+        integrand = measure(rho) / sizing.grown(start, rho) ** dim
+        total += per * float(np.sum(0.5 * (integrand[1:] + integrand[:-1]) * np.diff(rho)))
+    return total
+
+
+def check_symmetry_axes(symmetry: Sequence[str], allowed: Sequence[str]) -> tuple[str, ...]:
+    """Return the symmetry planes sorted, refusing unknown or repeated ones."""
+    axes = tuple(symmetry)
+    for i, axis in enumerate(axes):
+        if axis not in allowed:
+            raise SceneError(
+                f"symmetry[{i}]", f"expected one of {', '.join(map(repr, allowed))}, got {axis!r}"
+            )
+    if len(set(axes)) != len(axes):
+        raise SceneError("symmetry", f"lists a plane twice: {list(axes)}")
+    return tuple(sorted(axes))
+
+
+def refuse_mesh_options(sizing: MeshSizing, kind: str, keys: Sequence[str]) -> None:
+    """Refuse the MeshSizing options ``keys`` that a ``kind`` scene does not use."""
+    unused = {
+        "wall_rings": sizing.wall_rings != 0,
+        "path_size": sizing.path_size is not None,
+        "size_integration": sizing.size_integration != "fast",
+    }
+    owner = {
+        "wall_rings": "a borehole_plate",
+        "path_size": "a kgd_strip",
+        "size_integration": "a 2D plate",
+    }
+    for key in keys:
+        if unused[key]:
+            raise SceneError(f"mesh.{key}", f"not used by a {kind}; only {owner[key]} takes it")
+
+
 __all__ = [
     "AXES",
+    "MAX_CELLS",
     "MM",
     "Block",
     "Crack",
@@ -470,7 +526,10 @@ __all__ = [
     "axis_vector",
     "check_axis",
     "check_length",
+    "check_symmetry_axes",
     "check_vector",
+    "estimate_cells",
+    "refuse_mesh_options",
     "show_length",
     "tunnel_extension",
 ]

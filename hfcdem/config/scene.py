@@ -45,14 +45,7 @@ from typing import Any
 import numpy as np
 
 from hfcdem.config import catalogue
-from hfcdem.config.geometry import (
-    BoreholeSquare,
-    CrackPlate,
-    Geometry,
-    KGDStrip,
-    PerforatedBlock,
-    Scene,
-)
+from hfcdem.config.geometry import Geometry, PerforatedBlock, Scene
 from hfcdem.config.parts import (
     AXES,
     MM,
@@ -73,6 +66,7 @@ from hfcdem.config.parts import (
     show_length,
 )
 from hfcdem.config.physics import PHYSICS_SECTIONS, field_default, parse_physics
+from hfcdem.config.plates import BoreholeSquare, CrackPlate, KGDStrip
 from hfcdem.config.tables import MISSING, SceneError, TomlTable, build_within
 from hfcdem.config.units import FieldError, join_path
 

@@ -1,15 +1,15 @@
 """Gmsh models of 2D plates (plane strain, x-y plane) for the verification scenes.
 
-* :class:`~hfcdem.config.geometry.CrackPlate`: a plate with a central pre-existing crack
+* :class:`~hfcdem.config.plates.CrackPlate`: a plate with a central pre-existing crack
   along x (seed cdem-perforation-breakdown Table 1: 1 m square, 0.2 m crack).
   The crack is an internal line of the mesh: the triangles on its two sides
   share its facets (nothing is duplicated); the CDEM solid treats them as a
   pre-existing crack through interior-facet integrals ``dS(crack)``.
-* :class:`~hfcdem.config.geometry.KGDStrip`: a plate with an initial crack (``crack``)
+* :class:`~hfcdem.config.plates.KGDStrip`: a plate with an initial crack (``crack``)
   and, beyond it, the line the fracture is expected to follow
   (``fracture_path``), both internal lines; the injection point, the origin,
   is a mesh vertex.
-* :class:`~hfcdem.config.geometry.BoreholeSquare`: a square with a borehole at its
+* :class:`~hfcdem.config.plates.BoreholeSquare`: a square with a borehole at its
   centre (seed pfc2d sec. 3.2: 1000 mm square, 60 mm borehole).
 
 Tag names (the API):
@@ -34,8 +34,8 @@ from typing import Any
 import gmsh
 import numpy as np
 
-from hfcdem.config.geometry import BoreholeSquare, CrackPlate, KGDStrip
 from hfcdem.config.parts import SlabZone, SphereZone
+from hfcdem.config.plates import BoreholeSquare, CrackPlate, KGDStrip
 from hfcdem.mesh.block import element_quality
 from hfcdem.mesh.frames import Residual, kept_corners, plane_residual, slab_box
 from hfcdem.mesh.grading import add_grading, use_gradings

@@ -73,7 +73,8 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
-from hfcdem.config.geometry import BoreholeSquare, PerforatedBlock, Scene
+from hfcdem.config.geometry import PerforatedBlock, Scene
+from hfcdem.config.plates import BoreholeSquare
 from hfcdem.config.scene import parse_scene
 from hfcdem.config.scene import set_field as _set
 from hfcdem.config.tables import SceneError

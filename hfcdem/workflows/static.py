@@ -30,7 +30,8 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.config.geometry import CrackPlate, Scene
+from hfcdem.config.geometry import Scene
+from hfcdem.config.plates import CrackPlate
 from hfcdem.config.tables import SceneError
 from hfcdem.io.files import write_csv, write_json
 from hfcdem.io.plots import plot_lines
