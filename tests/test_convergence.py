@@ -82,7 +82,7 @@ def test_an_injection_study_over_element_sizes(shared_tmp_path):
     # and with two cases only their difference as the error
     out = shared_tmp_path / "kgd"
     argv = ["study", "--convergence", "meshes/scenes/kgd_strip.toml"]
-    argv += ["--parameter", "geometry.mesh.size", "--values", "1 m,0.5 m"]
+    argv += ["--resolutions", "coarse,default"]
     argv += ["--set", "injection.duration='2 s'", "-o", str(out)]
     assert main(argv) == 0
     table = _table(out / "results.csv")
@@ -118,6 +118,9 @@ def test_study_files_name_their_kind_and_bad_sweeps_are_refused():
         convergence_study("meshes/scenes/kgd_strip.toml", "injection.rate", ["1 m3/s"])
     with pytest.raises(SceneError, match="share a h"):  # '1 m' and '100 cm': one size
         convergence_study("meshes/scenes/kgd_strip.toml", "geometry.mesh.size", ["1 m", "100 cm"])
+    # the KGD scene fixes its path facets (mesh.path_size): sizes alone do not refine it
+    with pytest.raises(SceneError, match="share a h"):
+        convergence_study("meshes/scenes/kgd_strip.toml", "geometry.mesh.size", ["1 m", "0.5 m"])
 
 
 def test_the_measure_of_each_swept_key():

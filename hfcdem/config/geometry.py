@@ -1,9 +1,10 @@
 """Scene geometries: the parts assembled, checked for fit, before Gmsh runs.
 
 A 3D :class:`PerforatedBlock` (wellbore and perforation tunnels in a rock
-block); the 2D plates live in :mod:`hfcdem.config.plates`.  Each refuses a scene that cannot be meshed (tunnels
-leaving the block or crossing, sizes that cannot resolve a feature or would
-give an absurd cell count) and knows its mirror symmetries.  :class:`Scene`
+block); the 2D plates live in :mod:`hfcdem.config.plates`.  Each refuses a
+scene that cannot be meshed (tunnels leaving the block or crossing, sizes that
+cannot resolve a feature or would give an absurd cell count) and knows its
+mirror symmetries.  :class:`Scene`
 pairs a geometry (block or plate) with its name and physics.
 
 Validation needs a little geometry (where tunnels reach, how many cells a

@@ -74,7 +74,7 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem.config.geometry import PerforatedBlock, Scene
-from hfcdem.config.plates import BoreholeSquare
+from hfcdem.config.plates import BoreholeSquare, KGDStrip
 from hfcdem.config.scene import parse_scene
 from hfcdem.config.scene import set_field as _set
 from hfcdem.config.tables import SceneError
@@ -120,6 +120,8 @@ def characteristic_size(scene: Scene) -> float:
         return float(np.mean(sizes)) if sizes else float(geom.wellbore_size)
     if isinstance(geom, BoreholeSquare):
         return float(geom.wall_size)
+    if isinstance(geom, KGDStrip):
+        return float(geom.path_start)  # the facets the fracture runs along
     return float(mesh.size)
 
 
