@@ -233,6 +233,13 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     info = sub.add_parser("info", help="print the versions of hfcdem, DOLFINx, PETSc, Gmsh, MPI")
     info.set_defaults(func=_info)
+    _add_mesh(sub)
+    _add_run(sub)
+    _add_study(sub)
+    return parser
+
+
+def _add_mesh(sub: Any) -> None:
     mesh = sub.add_parser(
         "mesh",
         help="mesh scene files: .msh, .xdmf (ParaView), .png and mesh_report.json",
@@ -254,6 +261,9 @@ def build_parser() -> argparse.ArgumentParser:
     mesh.add_argument("--scene-dir", default="meshes/scenes", metavar="DIR")
     mesh.add_argument("--no-picture", action="store_true", help="skip the PNG")
     mesh.set_defaults(func=_mesh)
+
+
+def _add_run(sub: Any) -> None:
     run = sub.add_parser(
         "run",
         help="run a scene: inject, break, write summary.json, history.csv, pictures, fields",
@@ -276,6 +286,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="replace a scene field, e.g. --set injection.duration='120 s' (repeatable)",
     )
     run.set_defaults(func=_run)
+
+
+def _add_study(sub: Any) -> None:
     study = sub.add_parser(
         "study",
         help="sweep a scene field over values, or run a convergence study (--convergence)",
@@ -311,7 +324,6 @@ def build_parser() -> argparse.ArgumentParser:
     )
     study.add_argument("--force", action="store_true", help="rerun cases that are done")
     study.set_defaults(func=_study)
-    return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
