@@ -299,8 +299,7 @@ def test_iterative_solver_matches_direct():
 
 def test_sliver_elements_solve_finite_or_stop_clearly():
     import dolfinx
-
-    from hfcdem.mesh.tagged import TaggedMesh
+    from tiny_solid import tag_sides
 
     comm = MPI.COMM_WORLD
     mesh = dolfinx.mesh.create_unit_square(
@@ -309,17 +308,7 @@ def test_sliver_elements_solve_finite_or_stop_clearly():
     # squash a column of vertices almost onto its neighbours: aspect ratios ~1e5
     x = mesh.geometry.x
     x[np.isclose(x[:, 0], 0.5), 0] = 1.0 / 3.0 + 1e-6
-    tdim = mesh.topology.dim
-    mesh.topology.create_connectivity(tdim - 1, tdim)
-    left = dolfinx.mesh.locate_entities_boundary(mesh, 1, lambda p: np.isclose(p[0], 0.0))
-    right = dolfinx.mesh.locate_entities_boundary(mesh, 1, lambda p: np.isclose(p[0], 1.0))
-    facets = np.concatenate([left, right]).astype(np.int32)
-    values = np.concatenate([np.full(len(left), 1), np.full(len(right), 2)]).astype(np.int32)
-    order = np.argsort(facets)
-    ftags = dolfinx.mesh.meshtags(mesh, 1, facets[order], values[order])
-    cells = np.arange(mesh.topology.index_map(2).size_local, dtype=np.int32)
-    ctags = dolfinx.mesh.meshtags(mesh, 2, cells, np.ones_like(cells))
-    tmesh = TaggedMesh(mesh, ctags, ftags, {"rock": 1}, {"left": 1, "right": 2})
+    tmesh = tag_sides(mesh, 1.0)
     solid = CDEMSolid(
         tmesh,
         ROCK,

@@ -1,7 +1,8 @@
 """A CDEM solid on a 4 x 2 rectangle mesh (16 triangles) for fast coupling tests.
 
-Not a test module: imported by test_condense, test_groups, test_checkpoint and
-test_events.  The vertical facets on x = 1 can be broken into a two-facet crack.
+Not a test module: imported by test_condense, test_groups, test_checkpoint,
+test_events, test_fields and test_cdem (``tag_sides``).  The vertical facets
+on x = 1 can be broken into a two-facet crack.
 """
 
 import dolfinx
@@ -13,22 +14,27 @@ from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solid.cdem import CDEMSolid
 
 
-def tiny_solid(comm: MPI.Comm = MPI.COMM_WORLD, stress: float = 1e6) -> CDEMSolid:
-    """Rock in [0, 2] x [0, 1]: wall 'left' (x = 0), 'right' (x = 2) fixed."""
-    mesh = dolfinx.mesh.create_rectangle(
-        comm, [[0.0, 0.0], [2.0, 1.0]], [4, 2], ghost_mode=dolfinx.mesh.GhostMode.shared_facet
-    )
+def tag_sides(mesh: dolfinx.mesh.Mesh, x_right: float) -> TaggedMesh:
+    """Tag the edges x = 0 'left' and x = ``x_right`` 'right', every cell 'rock'."""
     tdim = mesh.topology.dim
     mesh.topology.create_connectivity(tdim - 1, tdim)
     left = dolfinx.mesh.locate_entities_boundary(mesh, 1, lambda p: np.isclose(p[0], 0.0))
-    right = dolfinx.mesh.locate_entities_boundary(mesh, 1, lambda p: np.isclose(p[0], 2.0))
+    right = dolfinx.mesh.locate_entities_boundary(mesh, 1, lambda p: np.isclose(p[0], x_right))
     facets = np.concatenate([left, right]).astype(np.int32)
     values = np.concatenate([np.full(len(left), 1), np.full(len(right), 2)]).astype(np.int32)
     order = np.argsort(facets)
     ftags = dolfinx.mesh.meshtags(mesh, 1, facets[order], values[order])
     cells = np.arange(mesh.topology.index_map(2).size_local, dtype=np.int32)
     ctags = dolfinx.mesh.meshtags(mesh, 2, cells, np.ones_like(cells))
-    tmesh = TaggedMesh(mesh, ctags, ftags, {"rock": 1}, {"left": 1, "right": 2})
+    return TaggedMesh(mesh, ctags, ftags, {"rock": 1}, {"left": 1, "right": 2})
+
+
+def tiny_solid(comm: MPI.Comm = MPI.COMM_WORLD, stress: float = 1e6) -> CDEMSolid:
+    """Rock in [0, 2] x [0, 1]: wall 'left' (x = 0), 'right' (x = 2) fixed."""
+    mesh = dolfinx.mesh.create_rectangle(
+        comm, [[0.0, 0.0], [2.0, 1.0]], [4, 2], ghost_mode=dolfinx.mesh.GhostMode.shared_facet
+    )
+    tmesh = tag_sides(mesh, 2.0)
     return CDEMSolid(
         tmesh,
         ElasticMaterial(10e9, 0.25),
