@@ -310,7 +310,8 @@ def _add_study(sub: Any) -> None:
         "--parameter",
         default="resolution",
         help="with --convergence: the swept key (resolution, geometry.mesh.size, "
-        "rock.spring_factor, solver.time_step, solver.max_time_step, solver.linear_solver)",
+        "rock.spring_factor, solver.time_step, solver.max_time_step, solver.linear_solver, "
+        "solver.solid, solver.band_threshold)",
     )
     study.add_argument(
         "--values", metavar="A,B,C", help="the swept values (replace a study file's)"

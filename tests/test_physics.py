@@ -1,5 +1,6 @@
 """The physics sections of scene files: units, defaults and errors that name the key."""
 
+import inspect
 import math
 
 import pytest
@@ -97,6 +98,12 @@ def test_cavity_options():
         ({"injection__wall_film": 5e-6}, "injection.wall_film"),  # a number without unit
         ({"injection__wall_joints": "damp"}, "injection.wall_joints"),
         ({"solver__linear_solver": "lu"}, "solver.linear_solver"),
+        ({"solver__solid": "partial"}, "solver.solid"),
+        ({"solver__solid": "reduced", "solver__degree": 2}, "solver.solid"),
+        ({"solver__band_threshold": 0.0}, "solver.band_threshold"),
+        ({"solver__band_threshold": 1.5}, "solver.band_threshold"),
+        ({"solver__band_rings": -1}, "solver.band_rings"),
+        ({"solver__band_rings": 1.5}, "solver.band_rings"),
     ],
 )
 def test_bad_input_names_the_key(changes, key):
@@ -122,6 +129,7 @@ def test_every_default_has_one_home():
     from hfcdem.config.materials import Fluid, InterfaceModel
     from hfcdem.config.physics import SolverSettings
     from hfcdem.coupling.hydrofrac import FlowSettings
+    from hfcdem.solid.cdem import CDEMSolid
 
     solver, flow, model = SolverSettings(), FlowSettings(cavity=("wall",)), InterfaceModel()
     assert solver.fidelity == flow.fidelity
@@ -131,6 +139,9 @@ def test_every_default_has_one_home():
     assert solver.break_tolerance == flow.break_tolerance
     assert solver.max_breaks_per_iteration == flow.max_breaks_per_iteration
     assert solver.break_rule == model.break_rule
+    solid = inspect.signature(CDEMSolid).parameters
+    assert solver.solid == solid["mode"].default
+    assert (solver.band_threshold, solver.band_rings) == solid["band"].default
     phys = scene().physics
     assert phys.solver == solver
     assert phys.fluid == Fluid()

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import ufl
 from mpi4py import MPI
+from tiny_solid import unit_block
 
 from hfcdem import analytic
 from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
@@ -13,10 +14,9 @@ from hfcdem.config.parts import Crack, MeshSizing, Plate
 from hfcdem.config.plates import CrackPlate
 from hfcdem.io.sampling import evaluate_at_points
 from hfcdem.mesh.build import mesh_geometry
-from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solid.cdem import CDEMSolid, Loads
 from hfcdem.solid.elastic import strain, stress
-from hfcdem.solid.reduction import ReducedSolid, VertexClusters, glued_facet_set
+from hfcdem.solid.reduction import ReducedSystem, VertexClusters, glued_facet_set
 
 MPa = 1e6
 E, NU, P, A = 210e9, 0.25, 22e6, 0.1
@@ -28,34 +28,9 @@ def allmax(values):
     return comm.allreduce(float(np.max(np.abs(values), initial=0.0)), op=MPI.MAX)
 
 
-def block(dim):
-    """Unit square (cube): left face fixed, bottom on rollers, pressure on the right."""
-    if dim == 2:
-        mesh = dolfinx.mesh.create_unit_square(comm, 8, 6)
-    else:
-        mesh = dolfinx.mesh.create_unit_cube(comm, 4, 3, 3)
-    fdim = dim - 1
-    sides = {"left": (0, 0.0), "right": (0, 1.0), "bottom": (1, 0.0)}
-    idx, vals = [], []
-    for tag, (axis, at) in enumerate(sides.values(), start=1):
-        found = dolfinx.mesh.locate_entities_boundary(
-            mesh, fdim, lambda x, a=axis, v=at: np.isclose(x[a], v)
-        )
-        idx.append(found)
-        vals.append(np.full(len(found), tag, dtype=np.int32))
-    idx_all, vals_all = np.concatenate(idx), np.concatenate(vals)
-    idx_all, first = np.unique(idx_all, return_index=True)  # an edge facet keeps one group
-    facet_tags = dolfinx.mesh.meshtags(mesh, fdim, idx_all, vals_all[first])
-    cmap = mesh.topology.index_map(dim)
-    cells = np.arange(cmap.size_local + cmap.num_ghosts, dtype=np.int32)
-    cell_tags = dolfinx.mesh.meshtags(mesh, dim, cells, np.ones_like(cells))
-    names = {name: k for k, name in enumerate(sides, start=1)}
-    return TaggedMesh(mesh, cell_tags, facet_tags, {"rock": 1}, names)
-
-
 def block_solid(dim, alpha=100.0):
     return CDEMSolid(
-        block(dim),
+        unit_block(dim),
         STEEL,
         InSituStress(8 * MPa, 5 * MPa, 6 * MPa),
         InterfaceModel(alpha=alpha),
@@ -93,15 +68,19 @@ def continuous_solution(solid, loads):
 
 def reduced_solution(solid, glued, loads):
     target = dolfinx.fem.Function(solid.V)
-    reduced = ReducedSolid(solid, glued)
-    reduced.solve(loads, target)
+    reduced = ReducedSystem(solid.V, solid.bcs, glued)
+    a_form, A = solid.assemble_stiffness()
+    ksp = reduced.factorize(A)
+    A.destroy()
+    reduced.solve(ksp, solid.assemble_load(a_form, solid.load_form(loads)), target)
+    ksp.destroy()
     return reduced, target
 
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_all_glued_is_continuous_p1_elasticity(dim):
     solid = block_solid(dim)
-    reduced, u = reduced_solution(solid, glued_facet_set(solid), BLOCK_LOADS)
+    reduced, u = reduced_solution(solid, glued_facet_set(solid.interface_facets), BLOCK_LOADS)
     vertices = solid.mesh.topology.index_map(0).size_global
     assert reduced.num_dofs == dim * vertices
     ref = continuous_solution(solid, BLOCK_LOADS)
@@ -113,7 +92,7 @@ def test_nothing_glued_is_the_dg_solution():
     solid = block_solid(2)
     nothing = np.zeros(solid.num_facets, dtype=bool)
     reduced, u = reduced_solution(
-        solid, glued_facet_set(solid, nothing, outside=False), BLOCK_LOADS
+        solid, glued_facet_set(solid.interface_facets, nothing, outside=False), BLOCK_LOADS
     )
     assert reduced.num_dofs == solid.V.dofmap.index_map.size_global * 2
     # a permutation: every column holds exactly one 1
@@ -154,7 +133,7 @@ def crack_opening(u, x):
 
 def test_cluster_count_counts_vertices_and_crack_faces():
     solid = crack_solid(100.0)
-    clusters = VertexClusters.build(solid.V, glued_facet_set(solid))
+    clusters = VertexClusters.build(solid.V, glued_facet_set(solid.interface_facets))
     # each crack vertex but the tip has two clusters; the crack has one more vertex than facets
     cracks = comm.allreduce(int(np.count_nonzero(solid.is_crack & solid.owned)), op=MPI.SUM)
     vertices = solid.mesh.topology.index_map(0).size_global
@@ -169,7 +148,7 @@ def test_reduced_converges_to_dg_as_one_over_alpha_and_matches_sneddon():
     diffs, errors = [], {}
     for alpha in (1e2, 1e3, 1e4):
         solid = crack_solid(alpha)
-        _, u_red = reduced_solution(solid, glued_facet_set(solid), loads)
+        _, u_red = reduced_solution(solid, glued_facet_set(solid.interface_facets), loads)
         solid.solve(loads)
         diffs.append(allmax(u_red.x.array - solid.u.x.array) / allmax(solid.u.x.array))
         errors[f"full {alpha:g}"] = crack_opening(solid.u, x) / ref - 1

@@ -1,7 +1,8 @@
 """A CDEM solid on a 4 x 2 rectangle mesh (16 triangles) for fast coupling tests.
 
 Not a test module: imported by test_condense, test_groups, test_checkpoint,
-test_events, test_fields and test_cdem (``tag_sides``).  The vertical facets
+test_events, test_fields and test_cdem (``tag_sides``); ``unit_block`` by
+test_reduction and test_band.  The vertical facets
 on x = 1 can be broken into a two-facet crack.
 """
 
@@ -27,6 +28,31 @@ def tag_sides(mesh: dolfinx.mesh.Mesh, x_right: float) -> TaggedMesh:
     cells = np.arange(mesh.topology.index_map(2).size_local, dtype=np.int32)
     ctags = dolfinx.mesh.meshtags(mesh, 2, cells, np.ones_like(cells))
     return TaggedMesh(mesh, ctags, ftags, {"rock": 1}, {"left": 1, "right": 2})
+
+
+def unit_block(dim: int, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
+    """Unit square (cube) with its faces x = 0 'left', x = 1 'right' and y = 0 'bottom'."""
+    if dim == 2:
+        mesh = dolfinx.mesh.create_unit_square(comm, 8, 6)
+    else:
+        mesh = dolfinx.mesh.create_unit_cube(comm, 4, 3, 3)
+    fdim = dim - 1
+    sides = {"left": (0, 0.0), "right": (0, 1.0), "bottom": (1, 0.0)}
+    idx, vals = [], []
+    for tag, (axis, at) in enumerate(sides.values(), start=1):
+        found = dolfinx.mesh.locate_entities_boundary(
+            mesh, fdim, lambda x, a=axis, v=at: np.isclose(x[a], v)
+        )
+        idx.append(found)
+        vals.append(np.full(len(found), tag, dtype=np.int32))
+    idx_all, vals_all = np.concatenate(idx), np.concatenate(vals)
+    idx_all, first = np.unique(idx_all, return_index=True)  # an edge facet keeps one group
+    facet_tags = dolfinx.mesh.meshtags(mesh, fdim, idx_all, vals_all[first])
+    cmap = mesh.topology.index_map(dim)
+    cells = np.arange(cmap.size_local + cmap.num_ghosts, dtype=np.int32)
+    cell_tags = dolfinx.mesh.meshtags(mesh, dim, cells, np.ones_like(cells))
+    names = {name: k for k, name in enumerate(sides, start=1)}
+    return TaggedMesh(mesh, cell_tags, facet_tags, {"rock": 1}, names)
 
 
 def tiny_solid(comm: MPI.Comm = MPI.COMM_WORLD, stress: float = 1e6) -> CDEMSolid:

@@ -58,6 +58,12 @@ them so a run's record can print what was assumed.  Any invalid field raises
     break_tolerance = 0.01      # a step may overshoot the next break by this fraction
     linear_solver = "auto"      # "direct" (MUMPS LDL^T), "iterative" (CG + GAMG) or "auto":
                                 # direct up to 300k unknowns
+    solid = "full"              # "full": DG springs on every interface of the zone (the
+                                # reference); "reduced": springs only in a band that grows,
+                                # continuous blocks elsewhere (DG1, direct; hfcdem.solid.band)
+    band_threshold = 0.3        # reduced: a glued interface joins the band when its traction
+                                # (from the cells' stress) reaches this share of its strength
+    band_rings = 2              # reduced: vertex rings of neighbours freed with each facet
 """
 
 from __future__ import annotations
@@ -105,6 +111,9 @@ class SolverSettings:
     strength_points: str = "vertices"
     break_tolerance: float = 0.01
     linear_solver: str = "auto"
+    solid: str = "full"
+    band_threshold: float = 0.3
+    band_rings: int = 2
 
 
 @dataclass(frozen=True)
@@ -401,6 +410,9 @@ def _read_solver(r: _Reader) -> SolverSettings:
             (SolverSettings, "linear_solver"),
             choices=("auto", "direct", "iterative"),
         ),
+        solid=r.get(so, "solid", "string", (SolverSettings, "solid"), choices=("full", "reduced")),
+        band_threshold=r.get(so, "band_threshold", "number", (SolverSettings, "band_threshold")),
+        band_rings=r.get(so, "band_rings", "number", (SolverSettings, "band_rings"), integer=True),
     )
     _check(
         0.0 < solver.break_tolerance <= 1.0,
@@ -408,6 +420,17 @@ def _read_solver(r: _Reader) -> SolverSettings:
         f"expected a fraction in (0, 1], got {solver.break_tolerance!r}",
     )
     _check(solver.degree in (1, 2), "solver.degree", f"expected 1 or 2, got {solver.degree!r}")
+    _check(
+        0.0 < solver.band_threshold <= 1.0,
+        "solver.band_threshold",
+        f"expected a fraction of the strength in (0, 1], got {solver.band_threshold!r}",
+    )
+    _check(solver.band_rings >= 0, "solver.band_rings", f"expected >= 0, got {solver.band_rings}")
+    _check(
+        solver.solid == "full" or solver.degree == 1,
+        "solver.solid",
+        "the reduced solid needs degree = 1 (DG1 blocks)",
+    )
     for key in ("time_step", "max_time_step"):
         value = getattr(solver, key)
         _check(value > 0.0, f"solver.{key}", f"must be a positive time, got {value:g} s")

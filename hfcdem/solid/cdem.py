@@ -37,6 +37,7 @@ from petsc4py import PETSc
 
 from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
 from hfcdem.mesh.tagged import TaggedMesh
+from hfcdem.solid.band import SOLID_MODES, InterfaceBand, StressRecovery
 from hfcdem.solid.elastic import stress
 from hfcdem.solid.facets import FacetFunctions, InterfaceFacets, ZoneMarker
 from hfcdem.solid.forms import (
@@ -59,6 +60,7 @@ from hfcdem.solid.interfaces import (
     stable_facet_hash,
     weibull_scatter,
 )
+from hfcdem.solid.reduction import ReducedSystem, glued_facet_set
 from hfcdem.solid.states import OPEN, SLIP, STICK, InterfaceStates
 from hfcdem.solvers import DIRECT_CHOLESKY, check_ksp, create_ksp, setup_factorisation
 
@@ -105,6 +107,8 @@ class CDEMSolid:
         nitsche_penalty: float | None = None,
         solver: str = "auto",
         strength_points: str = "vertices",
+        mode: str = "full",
+        band: tuple[float, int] = (0.3, 2),
         petsc_options: Mapping[str, object] | None = None,
         prefix: str = "hfcdem_cdem_",
     ) -> None:
@@ -116,8 +120,13 @@ class CDEMSolid:
             raise ValueError(
                 f"strength_points must be 'vertices' or 'midpoint', got {strength_points!r}"
             )
+        if mode not in SOLID_MODES:
+            raise ValueError(f"mode must be one of {SOLID_MODES}, got {mode!r}")
+        if mode == "reduced" and degree != 1:
+            raise ValueError(f"the reduced mode needs DG1 blocks (degree 1), got {degree!r}")
         self.tmesh = tmesh
         self.mesh = mesh = tmesh.mesh
+        self.mode = mode
         self.comm: MPI.Comm = mesh.comm
         self.material = material
         self.in_situ = in_situ
@@ -158,6 +167,11 @@ class CDEMSolid:
         )
         # facets that ever broke, and their contact sub-state
         self.states = InterfaceStates.initial(self.is_crack, gdim)
+        # reduced mode: free springs only in a band, glued (continuous) elsewhere
+        self.band = InterfaceBand(mesh, self.interface_facets, *band, all_free=mode == "full")
+        self._recovery = StressRecovery(self.u, material)
+        self._reduced: ReducedSystem | None = None
+        self._reduced_version = -1
         self.solves = 0
         self.solve_seconds = 0.0
         self.events: list[BreakEvent] = []
@@ -318,7 +332,9 @@ class CDEMSolid:
         """
         t0 = time.perf_counter()
         a_form, A = self.assemble_stiffness()
-        if self.solver_kind == "direct":
+        if self.mode == "reduced":
+            ksp = self._reduced_system().factorize(A)
+        elif self.solver_kind == "direct":
             # factorised here, with more room if MUMPS's dynamic scheduling needs it
             ksp = setup_factorisation(lambda: self._ksp(A), self.comm)
         else:
@@ -337,8 +353,11 @@ class CDEMSolid:
         """Solve ``K target = L`` with a factorised ``ksp`` (from :meth:`factorize`)."""
         t0 = time.perf_counter()
         b = self.assemble_load(a_form, L_form)
-        ksp.solve(b, target.x.petsc_vec)
-        target.x.scatter_forward()
+        if self.mode == "reduced":
+            self._reduced_system().solve(ksp, b, target)
+        else:
+            ksp.solve(b, target.x.petsc_vec)
+            target.x.scatter_forward()
         b.destroy()
         check_ksp(
             ksp,
@@ -353,6 +372,23 @@ class CDEMSolid:
                 "held (rollers/fixed faces) and that alpha is not extreme"
             )
         self.solve_seconds += time.perf_counter() - t0
+
+    def _reduced_system(self) -> ReducedSystem:
+        """Return the reduced system of the current band (rebuilt when the band grew)."""
+        if self._reduced is None or self._reduced_version != self.band.version:
+            glued = glued_facet_set(self.interface_facets, ~self.band.free)
+            self._reduced = ReducedSystem(
+                self.V, self._bcs, glued, self.petsc_options, prefix=self.prefix
+            )
+            self._reduced_version = self.band.version
+        return self._reduced
+
+    @property
+    def num_dofs(self) -> int:
+        """Global number of unknowns solved for (reduced or DG)."""
+        if self.mode == "reduced":
+            return self._reduced_system().num_dofs
+        return int(self.V.dofmap.index_map.size_global * self.gdim)
 
     def load_form(self, loads: Loads) -> dolfinx.fem.Form:
         """Compiled right-hand side of ``loads`` for the current interface states."""
@@ -396,6 +432,12 @@ class CDEMSolid:
             (t0 - t0n[:, None] * n) - self.ks[:, None] * jt,
             np.where((self.contact == SLIP)[:, None], self.friction_traction, 0.0),
         )
+        glued = ~self.band.free
+        if u is self.u and glued.any():
+            # glued facets carry no jump: their traction is the cells' stress
+            tn_rec, shear_rec = self._recovery.tractions(self.interface_facets, s0, glued)
+            tn = np.where(glued, tn_rec, tn)
+            tau_vec = np.where(glued[:, None], shear_rec, tau_vec)
         # physical aperture of an open facet: the pre-compression offset removed
         offset = np.where(t0n < 0.0, -t0n / self.kn, 0.0)
         opening = np.where(intact_like, w, np.maximum(w - offset * (~self.is_crack), 0.0))
@@ -448,14 +490,43 @@ class CDEMSolid:
             worse = check.ratio > ratio
             ratio = np.where(worse, check.ratio, ratio)
             mode = np.where(worse, check.mode, mode)
-        ratio = np.where((self.state == FacetState.INTACT) & self.owned, ratio, 0.0)
+        # a glued facet breaks only once freed (grow_band): its springs decide then
+        breakable = (self.state == FacetState.INTACT) & self.owned & self.band.free
+        ratio = np.where(breakable, ratio, 0.0)
         return ratio, mode
+
+    def grow_band(self, loads: Loads) -> int:
+        """Free the glued facets whose recovered traction nears their strength (reduced mode).
+
+        Collective.  Returns the global number of facets freed (always 0 in the full
+        mode); the caller solves again when it is not 0.
+        """
+        if self.mode == "full":
+            return 0
+        snap = self.snapshot(loads)
+        check = check_failure(
+            snap.normal_traction, snap.shear_traction, self.t0, self.c0, self.model.friction
+        )
+        near = ~self.band.free & self.owned & (check.ratio >= self.band.threshold)
+        return self.band.include(near)
+
+    def free_interfaces(self, flags: np.ndarray, rings: int = 0) -> int:
+        """Free the interfaces ``flags`` marks and ``rings`` vertex rings around; collective.
+
+        E.g. joints under fluid pressure: a glued facet carries no jump, so a load on
+        its faces would do no work.  Returns the global number freed (0 in the full mode).
+        """
+        return 0 if self.mode == "full" else self.band.include(flags, rings=rings)
 
     def break_facets(self, facets: np.ndarray, modes: np.ndarray, load_factor: float) -> None:
         """Break local ``facets`` in ``modes`` (1 tensile, 2 shear) at ``load_factor``."""
         # tensile breaks start open, shear breaks closed; update_contact corrects both
         self.states.break_facets(facets, modes)
         self.sync_ghost_states()
+        if self.mode == "reduced":  # the new crack tip's neighbours get springs
+            flags = np.zeros(self.num_facets, dtype=bool)
+            flags[facets] = True
+            self.band.include(flags)
         mids = self.midpoints[facets]
         self.events.append(BreakEvent(load_factor, facets, modes, mids))
 
@@ -481,6 +552,8 @@ class CDEMSolid:
                     f"{self.solves} solves, {time.perf_counter() - t0:.1f} s"
                 )
             self.solve(loads)
+            if self.grow_band(loads):
+                continue
             ratio, mode = self.overstress(loads)
             keys = self.midpoints
             chosen = select_breaking(
@@ -517,6 +590,11 @@ class CDEMSolid:
         the ramp ends at the first break.  Returns the load factor of the first
         break, or None if nothing breaks up to ``max_factor``.
         """
+        if self.mode == "reduced":
+            raise ValueError(
+                "ramp() needs mode='full': the reduced band is grown by equilibrate() "
+                "and the coupled runs, not by the linear ramp"
+            )
         lam = 0.0
         first: float | None = None
         while lam < max_factor:

@@ -1,4 +1,4 @@
-"""The CDEM solid in the subspace continuous across glued facets (issue 13, building block).
+"""The CDEM solid in the subspace continuous across glued facets.
 
 The DG1 displacement has one dof block per cell *corner* (cell, vertex).  Around a
 vertex, the corners of cells joined through *glued* facets form a *vertex
@@ -14,8 +14,9 @@ with none glued ``P`` is a permutation and the reduced problem is the DG one.
 Between, the glued springs act as infinitely stiff, which differs from the DG
 answer at spring factor alpha by O(1/alpha) (their compliance).
 
-Which facets are glued is the caller's input (:func:`glued_facet_set`), so the band
-of free interfaces can be chosen later.  Clusters are connected components of a
+Which facets are glued is the caller's input (:func:`glued_facet_set`); the solid
+chooses them as the complement of its band of free interfaces
+(:mod:`hfcdem.solid.band`).  Clusters are connected components of a
 graph on the DG dof blocks; they are found rank by rank and merged over the ghost
 layer, so the reduced system is the same on any number of ranks.
 """
@@ -34,29 +35,29 @@ from petsc4py import PETSc
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from hfcdem.solid.cdem import CDEMSolid, Loads
+from hfcdem.solid.facets import InterfaceFacets
 from hfcdem.solvers import DIRECT_CHOLESKY, check_ksp, create_ksp, setup_factorisation
 
 
 def glued_facet_set(
-    solid: CDEMSolid, glued: np.ndarray | None = None, outside: bool = True
+    facets: InterfaceFacets, glued: np.ndarray | None = None, outside: bool = True
 ) -> np.ndarray:
-    """Local indices of the glued facets of ``solid``.
+    """Local indices of the glued facets of a solid's ``facets``.
 
-    ``glued`` flags each interface facet of :attr:`CDEMSolid.facets` (None: every
-    interface that is not a pre-existing crack); ``outside`` adds the facets the
-    solid glues by Nitsche's method (outside the fracturable zone).  Flags must
-    agree between the owner and the ghosts of a facet.
+    ``glued`` flags each interface facet (None: every interface that is not a
+    pre-existing crack); ``outside`` adds the facets the solid glues by Nitsche's
+    method (outside the fracturable zone).  Flags must agree between the owner
+    and the ghosts of a facet.
     """
     if glued is None:
-        glued = ~solid.is_crack
+        glued = ~facets.is_crack
     glued = np.asarray(glued, dtype=bool)
-    if glued.shape != (solid.num_facets,):
+    if glued.shape != (facets.num_facets,):
         raise ValueError(
-            f"glued must flag each of the {solid.num_facets} interface facets, "
+            f"glued must flag each of the {facets.num_facets} interface facets, "
             f"got shape {glued.shape}"
         )
-    parts = [solid.facets[glued]] + ([solid.glue_facets] if outside else [])
+    parts = [facets.facets[glued]] + ([facets.glue_facets] if outside else [])
     return np.unique(np.concatenate(parts)).astype(np.int32)
 
 
@@ -214,65 +215,53 @@ class VertexClusters:
         return rows
 
 
-class ReducedSolid:
-    """Quasi-static solves of a :class:`CDEMSolid` in the subspace glued on ``glued`` facets.
+class ReducedSystem:
+    """Factorise and solve ``K`` of a DG1 space in the subspace glued on ``glued`` facets.
 
-    The solid's assembly (forms, interface states, Dirichlet conditions) is used as
-    is; only the linear system is reduced.  ``glued``: local facet indices
-    (:func:`glued_facet_set`).
+    ``bcs``: the (homogeneous) Dirichlet conditions of ``K``; a cluster with a held
+    corner is held as a whole.  The reduced system is always factorised (MUMPS
+    LDL^T): it is a continuous-P1-like system away from the band.
     """
 
     def __init__(
         self,
-        solid: CDEMSolid,
+        V: dolfinx.fem.FunctionSpace,
+        bcs: list[dolfinx.fem.DirichletBC],
         glued: np.ndarray,
         petsc_options: Mapping[str, object] | None = None,
         prefix: str = "hfcdem_reduced_",
     ) -> None:
-        if solid.degree != 1:
-            raise ValueError(f"the reduced solid needs DG1 blocks, got degree {solid.degree}")
-        self.solid = solid
+        t0 = time.perf_counter()
+        self.comm: MPI.Comm = V.mesh.comm
         self.prefix = prefix
         self.petsc_options = dict(petsc_options or {})
-        self.clusters = VertexClusters.build(solid.V, glued)
-        self.held = self.clusters.constrained(solid.bcs, solid.V)
-        self.seconds: dict[str, float] = {}
+        self.clusters = VertexClusters.build(V, glued)
+        self.held = self.clusters.constrained(bcs, V)
+        self.seconds: dict[str, float] = {"cluster": time.perf_counter() - t0}
 
     @property
     def num_dofs(self) -> int:
         """Global number of reduced unknowns."""
         return self.clusters.num_global * self.clusters.bs
 
-    def factorize(self) -> tuple[dolfinx.fem.Form, PETSc.KSP]:
-        """Assemble, reduce and factorise (MUMPS LDL^T); the caller destroys the KSP."""
+    def factorize(self, A: PETSc.Mat) -> PETSc.KSP:
+        """Reduce and factorise the assembled ``A`` (left to the caller); return the KSP."""
         t0 = time.perf_counter()
-        a_form, A = self.solid.assemble_stiffness()
-        t1 = time.perf_counter()
         A_red = self.clusters.reduce_matrix(A)
-        A.destroy()
         A_red.zeroRowsColumns(self.held, diag=1.0)
         A_red.setOption(PETSc.Mat.Option.SYMMETRIC, True)
-        t2 = time.perf_counter()
+        t1 = time.perf_counter()
         options = {**DIRECT_CHOLESKY, **self.petsc_options}
         ksp = setup_factorisation(
-            lambda: create_ksp(A_red, self.prefix, options, self.solid.comm), self.solid.comm
+            lambda: create_ksp(A_red, self.prefix, options, self.comm), self.comm
         )
-        A_red.destroy()
-        t3 = time.perf_counter()
-        self.seconds = {"assemble": t1 - t0, "reduce": t2 - t1, "factorise": t3 - t2}
-        return a_form, ksp
+        A_red.destroy()  # the KSP keeps its own reference
+        self.seconds.update(reduce=t1 - t0, factorise=time.perf_counter() - t1)
+        return ksp
 
-    def solve_load(
-        self,
-        ksp: PETSc.KSP,
-        a_form: dolfinx.fem.Form,
-        L_form: dolfinx.fem.Form,
-        target: dolfinx.fem.Function,
-    ) -> None:
-        """Solve the reduced ``K u = L`` with a factorised ``ksp``; prolong into ``target``."""
-        b = self.solid.assemble_load(a_form, L_form)
+    def solve(self, ksp: PETSc.KSP, b: PETSc.Vec, target: dolfinx.fem.Function) -> None:
+        """Solve the reduced system for the DG right-hand side ``b``; prolong into ``target``."""
         b_red = self.clusters.reduce_vector(b)
-        b.destroy()
         b_red.setValues(self.held, np.zeros(len(self.held)))
         b_red.assemble()
         u_red = b_red.duplicate()
@@ -282,11 +271,5 @@ class ReducedSolid:
         b_red.destroy()
         u_red.destroy()
 
-    def solve(self, loads: Loads, target: dolfinx.fem.Function) -> None:
-        """Factorise and solve for ``loads`` into ``target`` (a function on the solid's space)."""
-        a_form, ksp = self.factorize()
-        self.solve_load(ksp, a_form, self.solid.load_form(loads), target)
-        ksp.destroy()
 
-
-__all__ = ["ReducedSolid", "VertexClusters", "glued_facet_set"]
+__all__ = ["ReducedSystem", "VertexClusters", "glued_facet_set"]

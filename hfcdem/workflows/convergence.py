@@ -31,7 +31,10 @@ The swept parameter and the measure the error is extrapolated in (to 0):
   plate the wall size, on crack and KGD plates ``size``.
 - ``rock.spring_factor``: 1 / alpha (the spring softening falls as 1/alpha).
 - ``solver.time_step``, ``solver.max_time_step``: the step (s).
-- ``solver.linear_solver``: names, no measure: the table gives the spread.
+- ``solver.linear_solver``, ``solver.solid``: names, no measure: the table gives
+  the spread (``solid``: the full-DG reference against the reduced band).
+- ``solver.band_threshold``: the threshold itself (0 would free every interface,
+  the full mode).
 
 Run it, or give the scene and the values on the command line::
 
@@ -92,6 +95,8 @@ MEASURES: dict[str, tuple[str, str, float] | None] = {
     "solver.time_step": ("dt", "first time step (s)", 1.0),
     "solver.max_time_step": ("dt_max", "largest time step (s)", 1.0),
     "solver.linear_solver": None,
+    "solver.solid": None,
+    "solver.band_threshold": ("threshold", "band threshold (share of strength)", 1.0),
 }
 
 # (summary key, label): the answers whose discretisation error is estimated
