@@ -12,7 +12,10 @@ breaks the response is linear, so each next breaking pressure is found exactly
 rather than by small load steps.  The first break is compared with the
 Hubbert-Willis breakdown pressure 3 Sh - SH + T and must start along SH in
 tension; the cracks then grow stably as the pressure rises to 5 % above
-Hubbert-Willis (``--overpressure``).  Run with::
+Hubbert-Willis (``--overpressure``).  A cascade of breaks that does not settle at
+a fixed pressure ends the ramp there: one line says so, the breakdown (the first
+break) stands and the results are those of that state (``stopped`` in the
+summary).  Run with::
 
     python3 demos/borehole_breakdown.py -o results/borehole_breakdown
     mpirun -n 2 python3 demos/borehole_breakdown.py -o results/borehole_breakdown
@@ -26,6 +29,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from collections.abc import Callable
 
 import numpy as np
 from mpi4py import MPI
@@ -39,10 +43,36 @@ from hfcdem.io.files import prepare_output_dir, write_json, write_solid_results
 from hfcdem.io.plots import plot_interface_states, render_field
 from hfcdem.io.sampling import interpolate_expression
 from hfcdem.mesh.build import mesh_geometry
-from hfcdem.solid.cdem import CDEMSolid, Loads
+from hfcdem.solid.cdem import CascadeStopped, CDEMSolid, Loads
 from hfcdem.solid.interfaces import FacetState
 
 MPa = 1e6
+
+
+def ramp_to_breakdown(
+    solid: CDEMSolid,
+    loads: tuple[Loads, Loads],
+    final: float,
+    max_iterations: int,
+    log: Callable[[str], None],
+) -> tuple[float | None, CascadeStopped | None]:
+    """Ramp ``base + p unit`` to ``p = final``; return the first break and any cascade stop.
+
+    A cascade that does not settle at a fixed pressure ends the ramp: the first
+    break (the breakdown) is kept, and one line says where the cascade stopped.
+    """
+    base, unit = loads
+    try:
+        breakdown = solid.ramp(
+            base, unit, final, stop_after_first=False, max_iterations=max_iterations
+        )
+        return breakdown, None
+    except CascadeStopped as stop:
+        log(
+            f"the cascade did not settle at {stop.load_factor / MPa:.2f} MPa: {stop.broken} "
+            f"facets broke in {stop.iterations} iterations; the results are of that state"
+        )
+        return stop.first_break, stop
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -58,6 +88,9 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--alpha", type=float, default=100.0, help="kn = alpha E / h")
     parser.add_argument(
         "--overpressure", type=float, default=0.05, help="ramp to (1 + this) x Hubbert-Willis"
+    )
+    parser.add_argument(
+        "--max-iterations", type=int, default=200, help="re-solves per cascade of breaks"
     )
     parser.add_argument("--no-pictures", action="store_true")
     args = parser.parse_args(argv)
@@ -109,9 +142,16 @@ def main(argv: list[str] | None = None) -> dict:
     unit = Loads(cavity={"wellbore_wall": 1.0}, in_situ_factor=0.0)
     hw = analytic.hubbert_willis_breakdown(stress.sh_max, stress.sh_min, springs.tensile_strength)
     final = (1.0 + args.overpressure) * hw
-    breakdown = solid.ramp(base, unit, max_factor=final, stop_after_first=False)
+    if final <= 0.0:
+        raise SystemExit(
+            f"Hubbert-Willis pressure {hw / MPa:.1f} MPa <= 0: the wall fails in tension "
+            "before any pressure (SH > 3 Sh + T0); nothing to ramp"
+        )
+    breakdown, stop = ramp_to_breakdown(solid, (base, unit), final, args.max_iterations, log)
     if breakdown is None:
         raise SystemExit(f"no interface broke up to {final / MPa:.1f} MPa: check the inputs")
+    # a cascade that did not settle ends the ramp there: the results are of that state
+    reached = final if stop is None else stop.load_factor
     first = solid.events[0]
     mids = np.concatenate(comm.allgather(first.midpoints))
     modes = np.concatenate(comm.allgather(first.modes))
@@ -124,19 +164,19 @@ def main(argv: list[str] | None = None) -> dict:
         f"{'tensile' if np.all(modes == FacetState.TENSILE) else 'shear'}"
     )
     log(
-        f"at {final / MPa:.1f} MPa: {counts['tensile']} tensile and {counts['shear']} shear "
+        f"at {reached / MPa:.1f} MPa: {counts['tensile']} tensile and {counts['shear']} shear "
         "failures, "
         f"fracture degree {degree:.4f}, {solid.solves} solves in {solid.solve_seconds:.1f} s"
     )
 
-    loads = Loads(cavity={"wellbore_wall": final})
+    loads = Loads(cavity={"wellbore_wall": reached})
     paths = write_solid_results(out, solid, loads)
     if not args.no_pictures:
         plot_interface_states(
             out / "fracture.png",
             solid.vertex_coords[solid.owned],
             solid.state[solid.owned],
-            f"Failure state at {final / MPa:.1f} MPa (first break {breakdown / MPa:.1f} MPa), "
+            f"Failure state at {reached / MPa:.1f} MPa (first break {breakdown / MPa:.1f} MPa), "
             f"(SH {args.sh_max:g}, Sh {args.sh_min:g} MPa)",
             extent=2.0 * a,
             comm=comm,
@@ -147,7 +187,7 @@ def main(argv: list[str] | None = None) -> dict:
         render_field(
             sxx,
             out / "sigma_yy.png",
-            f"sigma_yy at {final / MPa:.1f} MPa (tension +)",
+            f"sigma_yy at {reached / MPa:.1f} MPa (tension +)",
             unit="MPa",
             crop=(-6 * a, 6 * a, -6 * a, 6 * a),
         )
@@ -160,6 +200,8 @@ def main(argv: list[str] | None = None) -> dict:
         "breakable_interfaces": comm.allreduce(int(solid.owned.sum()), op=MPI.SUM),
         "breakdown_pressure_MPa": breakdown / MPa,
         "final_pressure_MPa": final / MPa,
+        "reached_pressure_MPa": reached / MPa,
+        "stopped": None if stop is None else str(stop),
         "hubbert_willis_MPa": hw / MPa,
         "relative_error": breakdown / hw - 1,
         "first_crack_angle_from_SH_deg": angle,

@@ -38,6 +38,7 @@ _API = {
     "MeshingError": "hfcdem.mesh.tagged",
     # solid: blocks and interface springs
     "CDEMSolid": "hfcdem.solid.cdem",
+    "CascadeStopped": "hfcdem.solid.states",
     "Loads": "hfcdem.solid.cdem",
     "InterfaceModel": "hfcdem.config.materials",
     "ElasticMaterial": "hfcdem.config.materials",
@@ -49,7 +50,7 @@ _API = {
     "HydraulicFracture": "hfcdem.coupling.hydrofrac",
     "FlowSettings": "hfcdem.coupling.hydrofrac",
     "StepRecord": "hfcdem.coupling.hydrofrac",
-    "SimulationStopped": "hfcdem.coupling.hydrofrac",
+    "SimulationStopped": "hfcdem.solvers",
     # workflows and results
     "build_solid": "hfcdem.workflows.run",
     "build_fracture": "hfcdem.workflows.run",

@@ -7,7 +7,9 @@ into the PETSc options database only where the user (command line,
 
 A failed solve raises :class:`SolverError` on every rank at once: the reason is
 reduced over the communicator before anyone raises, so no rank is left waiting
-in a collective that a failed rank never reaches.
+in a collective that a failed rank never reaches.  A computation that cannot go
+on (a coupled step, a cascade of breaks) raises a :class:`SimulationStopped`,
+after which what was computed so far is kept.
 """
 
 from __future__ import annotations
@@ -45,6 +47,15 @@ _MUMPS_ERRORS = {
     -17: "the workspace is too small (raise mat_mumps_icntl_14)",
     -20: "the workspace is too small (raise mat_mumps_icntl_14)",
 }
+
+
+class SimulationStopped(RuntimeError):
+    """The computation could not continue; what it found so far is kept.
+
+    Raised on every rank at once.  The coupled run
+    (:mod:`hfcdem.coupling.hydrofrac`) and the solid's cascade of breaks
+    (:class:`hfcdem.solid.states.CascadeStopped`) stop with it.
+    """
 
 
 class SolverError(RuntimeError):
@@ -203,6 +214,7 @@ __all__ = [
     "DIRECT_CHOLESKY",
     "DIRECT_LU",
     "WORKSPACE_ERRORS",
+    "SimulationStopped",
     "SolverError",
     "check_ksp",
     "create_ksp",

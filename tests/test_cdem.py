@@ -16,8 +16,9 @@ from hfcdem.config.plates import BoreholeSquare, CrackPlate
 from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.mesh.penny import PennyBlock, create_penny_block
-from hfcdem.solid.cdem import CDEMSolid, Loads
+from hfcdem.solid.cdem import CascadeStopped, CDEMSolid, Loads
 from hfcdem.solid.interfaces import FacetState
+from hfcdem.solvers import SimulationStopped
 
 MPa = 1e6
 E, NU, P, A = 210e9, 0.25, 22e6, 0.1  # Table 1 of the perforation paper
@@ -226,8 +227,10 @@ def test_vanishing_strengths_solve_or_diagnose_without_nan(t0, c0):
     try:
         # 16 MPa exceeds 3 Sh - SH = 15 MPa: the wall is in tension
         solid.equilibrate(Loads(cavity={"wellbore_wall": 16 * MPa}), max_iterations=30)
-    except RuntimeError as err:
-        assert "did not settle in 30 iterations" in str(err)
+    except CascadeStopped as stop:
+        assert "did not settle in 30 iterations" in str(stop)
+        assert (stop.iterations, stop.load_factor, stop.first_break) == (30, 0.0, None)
+        assert stop.broken > 0
     counts = solid.broken_counts()
     assert counts["tensile"] + counts["shear"] > 0
     assert np.all(np.isfinite(solid.u.x.array))
@@ -240,10 +243,43 @@ def test_extreme_stress_ratio_is_solved_or_diagnosed():
     solid = borehole_solid(100.0, model=model, size=RADIUS / 5)
     try:
         solid.equilibrate(Loads(cavity={"wellbore_wall": 0.0}), max_iterations=50)
-    except RuntimeError as err:
-        assert "did not settle" in str(err)
+    except CascadeStopped as stop:
+        assert "did not settle" in str(stop) and stop.iterations == 50
     else:
         assert solid.fracture_degree() > 0.0
+    assert np.all(np.isfinite(solid.u.x.array))
+
+
+def _global_facets(solid, events):
+    return solid.comm.allreduce(sum(len(ev.facets) for ev in events), op=MPI.SUM)
+
+
+def test_a_cascade_that_does_not_settle_stops_the_ramp_and_keeps_its_breaks():
+    # one re-solve per load level: the first break leaves the states unsettled
+    solid = borehole_solid(1.3, size=RADIUS / 5)
+    with pytest.raises(CascadeStopped) as caught:
+        solid.ramp(
+            Loads(cavity={"wellbore_wall": 0.0}),
+            Loads(cavity={"wellbore_wall": 1.0}, in_situ_factor=0.0),
+            200 * MPa,
+            stop_after_first=False,
+            max_iterations=1,
+        )
+    stop = caught.value
+    assert isinstance(stop, SimulationStopped) and isinstance(stop, RuntimeError)
+    assert stop.iterations == 1 and stop.broken >= 1
+    # the breakdown is the first break: the same as that of a ramp given room to settle
+    settled = ramp_wellbore(borehole_solid(1.3, size=RADIUS / 5))
+    assert stop.first_break == pytest.approx(settled, rel=1e-9)
+    assert stop.first_break <= stop.load_factor <= 200 * MPa
+    assert f"{stop.load_factor:.6g}" in str(stop) and f"{stop.broken} facets" in str(stop)
+    # the breaks so far are kept: the events hold every broken facet, the last at the stop
+    assert solid.events[0].load_factor == pytest.approx(stop.first_break, rel=1e-8)
+    assert solid.events[-1].load_factor == stop.load_factor
+    counts = solid.broken_counts()
+    assert _global_facets(solid, solid.events) == counts["tensile"] + counts["shear"]
+    at_stop = [ev for ev in solid.events if ev.load_factor == stop.load_factor]
+    assert _global_facets(solid, at_stop) == stop.broken
     assert np.all(np.isfinite(solid.u.x.array))
 
 

@@ -49,6 +49,27 @@ def test_borehole_breakdown_demo_breaks_along_sh_near_hubbert_willis(shared_tmp_
     assert (out / "fields.bp").is_dir()
 
 
+def test_borehole_breakdown_demo_keeps_its_results_when_a_cascade_does_not_settle(
+    shared_tmp_path, capsys
+):
+    out = shared_tmp_path / "cascade"
+    # one re-solve per pressure level: the cascade at the first break cannot settle
+    summary = load("borehole_breakdown").main(
+        ["-o", str(out), "--size", "0.014", "--max-iterations", "1"]
+    )
+    assert "did not settle in 1 iterations" in summary["stopped"]
+    assert summary["breakdown_pressure_MPa"] <= summary["reached_pressure_MPa"]
+    assert summary["reached_pressure_MPa"] < summary["final_pressure_MPa"]
+    assert summary["tensile_failures"] + summary["shear_failures"] >= 1
+    on_disk = json.loads((out / "summary.json").read_text())
+    assert on_disk["stopped"] == summary["stopped"]
+    for name in ("fracture.png", "sigma_yy.png", "interfaces.vtu"):
+        assert (out / name).stat().st_size > 0, name
+    printed = capsys.readouterr().out
+    if MPI.COMM_WORLD.rank == 0:  # only rank 0 prints
+        assert printed.count("the cascade did not settle at") == 1
+
+
 def test_kgd_demo_matches_the_self_similar_solution(shared_tmp_path):
     out = shared_tmp_path / "kgd"
     summary = load("kgd_fracture").main(["-o", str(out), "--dx", "1.0"])

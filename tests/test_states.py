@@ -1,4 +1,4 @@
-"""Interface states: initial states, breaking, contact switching, copy/restore, ghosts."""
+"""Interface states: initial states, breaking, contact switching, copy/restore, ghosts, stops."""
 
 import dolfinx
 import numpy as np
@@ -6,10 +6,11 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
+from hfcdem.coupling.records import SimulationStopped
 from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.interfaces import FacetState
-from hfcdem.solid.states import OPEN, SLIP, STICK, InterfaceStates
+from hfcdem.solid.states import OPEN, SLIP, STICK, CascadeStopped, InterfaceStates
 
 
 def test_initial_states_cracks_open_rest_intact_and_stuck():
@@ -116,3 +117,14 @@ def test_ghosts_take_the_owners_states_on_any_rank_count():
         serial_ids = np.asarray(m1.geometry.input_global_indices)[v]
     serial_ids = comm.bcast(serial_ids, root=0)
     assert total == int(np.sum(serial_ids.sum(axis=1) % 3 == 0)) > 0
+
+
+def test_a_cascade_stop_names_its_load_and_counts_and_stops_a_coupled_run_too():
+    stop = CascadeStopped(2.5e6, 3, 7, first_break=2e6)
+    # the coupled run catches SimulationStopped: a cascade stop ends it cleanly as well
+    assert isinstance(stop, SimulationStopped)
+    assert (stop.load_factor, stop.broken, stop.iterations, stop.first_break) == (2.5e6, 3, 7, 2e6)
+    text = str(stop)
+    assert "did not settle in 7 iterations at load factor 2.5e+06" in text
+    assert "3 facets broke in the cascade, first break at 2e+06" in text
+    assert "first break" not in str(CascadeStopped(1.0, 0, 1))

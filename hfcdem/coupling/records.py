@@ -6,9 +6,8 @@ import math
 from dataclasses import dataclass, fields
 from typing import Any
 
-
-class SimulationStopped(RuntimeError):
-    """The coupled run could not continue; the history so far is kept."""
+# the coupled run stops with the same exception as the solid's cascade (one base)
+from hfcdem.solvers import SimulationStopped
 
 
 @dataclass

@@ -61,7 +61,7 @@ from hfcdem.solid.interfaces import (
     weibull_scatter,
 )
 from hfcdem.solid.reduction import ReducedSystem, glued_facet_set
-from hfcdem.solid.states import OPEN, SLIP, STICK, InterfaceStates
+from hfcdem.solid.states import OPEN, SLIP, STICK, CascadeStopped, InterfaceStates
 from hfcdem.solvers import DIRECT_CHOLESKY, check_ksp, create_ksp, setup_factorisation
 
 # solver="auto": direct (MUMPS) up to this many unknowns, CG + GAMG beyond
@@ -538,8 +538,10 @@ class CDEMSolid:
     def equilibrate(self, loads: Loads, max_iterations: int = 200, load_factor: float = 0.0) -> int:
         """Solve, then break overstressed facets and switch contacts until nothing changes.
 
-        Returns the number of facets broken (global). Raises RuntimeError with a
-        diagnostic when the active set does not settle in ``max_iterations``.
+        Returns the number of facets broken (global).  Raises
+        :class:`~hfcdem.solid.states.CascadeStopped` (on every rank) when the
+        active set does not settle in ``max_iterations``; the breaks made so far
+        stay in the states and in :attr:`events`.
         """
         broken_total = 0
         t0 = time.perf_counter()
@@ -567,10 +569,7 @@ class CDEMSolid:
             if self.update_contact(loads) == 0:
                 return broken_total
             self.sync_ghost_states()
-        raise RuntimeError(
-            f"interface states did not settle in {max_iterations} iterations "
-            f"({broken_total} facets broke); try break_rule='all' or a smaller load step"
-        )
+        raise CascadeStopped(load_factor, broken_total, max_iterations)
 
     def ramp(
         self,
@@ -588,7 +587,9 @@ class CDEMSolid:
         facet is found by sampling and bisection; at each critical level the
         states are equilibrated (:meth:`equilibrate`).  With ``stop_after_first``
         the ramp ends at the first break.  Returns the load factor of the first
-        break, or None if nothing breaks up to ``max_factor``.
+        break, or None if nothing breaks up to ``max_factor``.  A cascade that
+        does not settle raises :class:`~hfcdem.solid.states.CascadeStopped`
+        carrying that first break; the events so far stay in :attr:`events`.
         """
         if self.mode == "reduced":
             raise ValueError(
@@ -608,7 +609,12 @@ class CDEMSolid:
             lam = lam_star * (1.0 + 1e-9)
             loads = combine(base, unit, lam)
             self.u.x.array[:] += lam * self._u_unit.x.array
-            self.equilibrate(loads, max_iterations=max_iterations, load_factor=lam)
+            try:
+                self.equilibrate(loads, max_iterations=max_iterations, load_factor=lam)
+            except CascadeStopped as stop:
+                raise CascadeStopped(
+                    stop.load_factor, stop.broken, stop.iterations, first_break=first
+                ) from None
             if self.progress is not None:
                 counts = self.broken_counts()
                 self.progress(
@@ -681,6 +687,7 @@ __all__ = [
     "STICK",
     "BreakEvent",
     "CDEMSolid",
+    "CascadeStopped",
     "InterfaceSnapshot",
     "Loads",
     "ZoneMarker",

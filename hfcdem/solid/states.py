@@ -4,6 +4,8 @@
 :class:`~hfcdem.solid.interfaces.FacetState`); ``contact`` the contact sub-state
 of a broken facet (open, stick, slip); ``friction_traction`` the Coulomb traction
 of a sliding facet on its ``+`` face.  Owners decide; ghosts copy.
+A cascade of breaks that does not settle at a fixed load stops with
+:class:`CascadeStopped`; the states and breaks reached so far are kept.
 """
 
 from __future__ import annotations
@@ -14,9 +16,38 @@ import dolfinx
 import numpy as np
 
 from hfcdem.solid.interfaces import FacetState
+from hfcdem.solvers import SimulationStopped
 
 # contact sub-states of broken facets
 OPEN, STICK, SLIP = 0, 1, 2
+
+
+class CascadeStopped(SimulationStopped):
+    """The interface states did not settle at a fixed load (raised on every rank).
+
+    ``load_factor`` is the load of the cascade, ``broken`` the facets it broke
+    (global count), ``iterations`` the re-solves it took; ``first_break`` the
+    load factor of the first break of a ramp, if the stop came from one.  The
+    solid keeps the states and break events reached so far.
+    """
+
+    def __init__(
+        self,
+        load_factor: float,
+        broken: int,
+        iterations: int,
+        first_break: float | None = None,
+    ) -> None:
+        self.load_factor = load_factor
+        self.broken = broken
+        self.iterations = iterations
+        self.first_break = first_break
+        first = "" if first_break is None else f", first break at {first_break:.6g}"
+        super().__init__(
+            f"interface states did not settle in {iterations} iterations at load factor "
+            f"{load_factor:.6g} ({broken} facets broke in the cascade{first}); "
+            "try break_rule='all' or a smaller load step"
+        )
 
 
 @dataclass(eq=False)
@@ -103,4 +134,4 @@ class InterfaceStates:
         self.contact[:] = arr[facets, 1].astype(np.int8)
 
 
-__all__ = ["OPEN", "SLIP", "STICK", "InterfaceStates"]
+__all__ = ["OPEN", "SLIP", "STICK", "CascadeStopped", "InterfaceStates"]
