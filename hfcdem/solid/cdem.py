@@ -23,7 +23,6 @@ forms (:mod:`~hfcdem.solid.forms`); it owns the solver and the break state machi
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -39,6 +38,7 @@ from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceMode
 from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solid.band import SOLID_MODES, InterfaceBand, StressRecovery
 from hfcdem.solid.elastic import stress
+from hfcdem.solid.equilibrium import equilibrate, ramp
 from hfcdem.solid.facets import FacetFunctions, InterfaceFacets, ZoneMarker
 from hfcdem.solid.forms import (
     GLUE,
@@ -55,8 +55,6 @@ from hfcdem.solid.forms import (
 from hfcdem.solid.interfaces import (
     FacetState,
     check_failure,
-    critical_factors,
-    select_breaking,
     stable_facet_hash,
     weibull_scatter,
 )
@@ -147,7 +145,7 @@ class CDEMSolid:
             dofs = self.V.dofmap.index_map.size_global * gdim
             self.solver_kind = "direct" if dofs <= AUTO_DIRECT_MAX_DOFS else "iterative"
         self.u = dolfinx.fem.Function(self.V, name="displacement")
-        self._u_unit = dolfinx.fem.Function(self.V)
+        self.u_unit = dolfinx.fem.Function(self.V)  # response to a unit load (solve(unit=...))
         self.sigma0 = in_situ.tensor(gdim)
 
         self.interface_facets = InterfaceFacets.build(tmesh, zone, cracks)
@@ -397,7 +395,7 @@ class CDEMSolid:
     def solve(self, loads: Loads, unit: Loads | None = None) -> None:
         """Solve for ``loads`` (and, with the same matrix, for ``unit`` into ``u_unit``)."""
         a_form, ksp = self.factorize()
-        for item, target in zip((loads, unit), (self.u, self._u_unit), strict=True):
+        for item, target in zip((loads, unit), (self.u, self.u_unit), strict=True):
             if item is not None:
                 self.solve_load(ksp, a_form, self.load_form(item), target)
         ksp.destroy()
@@ -405,7 +403,7 @@ class CDEMSolid:
 
     # ------------------------------------------------------------- interfaces
 
-    def _jumps(self, u: dolfinx.fem.Function, x: np.ndarray | None = None) -> np.ndarray:
+    def jumps(self, u: dolfinx.fem.Function, x: np.ndarray | None = None) -> np.ndarray:
         """Displacement jump u+ - u- at one point per facet (default: midpoints)."""
         x = self.midpoints if x is None else x
         up = u.eval(x, self.cells[:, 0]) if len(x) else np.zeros((0, self.gdim))
@@ -417,7 +415,7 @@ class CDEMSolid:
     ) -> InterfaceSnapshot:
         """Return openings and tractions at one point per facet (default: midpoints)."""
         u = u or self.u
-        jump = self._jumps(u, points)
+        jump = self.jumps(u, points)
         n = self.normals
         s0 = loads.in_situ_factor * self.sigma0
         t0 = np.einsum("ij,fj->fi", s0, n)
@@ -461,7 +459,7 @@ class CDEMSolid:
         t0n = np.einsum(
             "fi,ij,fj->f", self.normals, loads.in_situ_factor * self.sigma0, self.normals
         )
-        w_raw = -np.einsum("fi,fi->f", self._jumps(self.u), self.normals)
+        w_raw = -np.einsum("fi,fi->f", self.jumps(self.u), self.normals)
         offset = np.where(t0n < 0.0, -t0n / self.kn, 0.0)
         self.states.switch_contacts(
             broken,
@@ -536,40 +534,11 @@ class CDEMSolid:
         self.states.sync_ghosts(imap, self.facets)
 
     def equilibrate(self, loads: Loads, max_iterations: int = 200, load_factor: float = 0.0) -> int:
-        """Solve, then break overstressed facets and switch contacts until nothing changes.
+        """Break and switch contacts at fixed ``loads`` until nothing changes (collective).
 
-        Returns the number of facets broken (global).  Raises
-        :class:`~hfcdem.solid.states.CascadeStopped` (on every rank) when the
-        active set does not settle in ``max_iterations``; the breaks made so far
-        stay in the states and in :attr:`events`.
+        See :func:`hfcdem.solid.equilibrium.equilibrate`.
         """
-        broken_total = 0
-        t0 = time.perf_counter()
-        for iteration in range(max_iterations):
-            if self.progress is not None and iteration and iteration % 10 == 0:
-                counts = self.broken_counts()
-                self.progress(
-                    f"  iteration {iteration}: {counts['tensile']} tensile, "
-                    f"{counts['shear']} shear, "
-                    f"{self.solves} solves, {time.perf_counter() - t0:.1f} s"
-                )
-            self.solve(loads)
-            if self.grow_band(loads):
-                continue
-            ratio, mode = self.overstress(loads)
-            keys = self.midpoints
-            chosen = select_breaking(
-                ratio, keys, self.model.break_rule, self.model.max_breaks, self.comm
-            )
-            n_break = int(self.comm.allreduce(len(chosen), op=MPI.SUM))
-            if n_break:
-                self.break_facets(chosen, mode[chosen], load_factor)
-                broken_total += n_break
-                continue
-            if self.update_contact(loads) == 0:
-                return broken_total
-            self.sync_ghost_states()
-        raise CascadeStopped(load_factor, broken_total, max_iterations)
+        return equilibrate(self, loads, max_iterations, load_factor)
 
     def ramp(
         self,
@@ -582,64 +551,9 @@ class CDEMSolid:
     ) -> float | None:
         """Raise ``base + lam * unit`` from 0 to ``max_factor``, breaking interfaces on the way.
 
-        Exploits linearity between events: two solves with one matrix give
-        ``u(lam) = u_base + lam u_unit``, and the critical ``lam`` of every intact
-        facet is found by sampling and bisection; at each critical level the
-        states are equilibrated (:meth:`equilibrate`).  With ``stop_after_first``
-        the ramp ends at the first break.  Returns the load factor of the first
-        break, or None if nothing breaks up to ``max_factor``.  A cascade that
-        does not settle raises :class:`~hfcdem.solid.states.CascadeStopped`
-        carrying that first break; the events so far stay in :attr:`events`.
+        See :func:`hfcdem.solid.equilibrium.ramp`.
         """
-        if self.mode == "reduced":
-            raise ValueError(
-                "ramp() needs mode='full': the reduced band is grown by equilibrate() "
-                "and the coupled runs, not by the linear ramp"
-            )
-        lam = 0.0
-        first: float | None = None
-        while lam < max_factor:
-            self.solve(base, unit)
-            crit = self._critical_factor(base, unit, lam, max_factor, samples)
-            local_min = float(crit.min()) if crit.size else math.inf
-            lam_star = self.comm.allreduce(local_min, op=MPI.MIN)
-            if not math.isfinite(lam_star):
-                break
-            first = lam_star if first is None else first
-            lam = lam_star * (1.0 + 1e-9)
-            loads = combine(base, unit, lam)
-            self.u.x.array[:] += lam * self._u_unit.x.array
-            try:
-                self.equilibrate(loads, max_iterations=max_iterations, load_factor=lam)
-            except CascadeStopped as stop:
-                raise CascadeStopped(
-                    stop.load_factor, stop.broken, stop.iterations, first_break=first
-                ) from None
-            if self.progress is not None:
-                counts = self.broken_counts()
-                self.progress(
-                    f"  load factor {lam:.6g}: {counts['tensile']} tensile, {counts['shear']} shear"
-                )
-            if stop_after_first:
-                break
-        return first
-
-    def _critical_factor(
-        self, base: Loads, unit: Loads, lam0: float, lam1: float, samples: int
-    ) -> np.ndarray:
-        """Smallest factor in (lam0, lam1] at which each intact owned facet fails."""
-        intact = (self.state == FacetState.INTACT) & self.owned
-        n = self.normals[intact]
-        return critical_factors(
-            [self._jumps(self.u, pts)[intact] for pts in self.strength_points],
-            [self._jumps(self._u_unit, pts)[intact] for pts in self.strength_points],
-            n,
-            np.einsum("ij,fj->fi", self.sigma0, n),
-            (base.in_situ_factor, unit.in_situ_factor),
-            (self.kn[intact], self.ks[intact]),
-            (self.t0[intact], self.c0[intact], self.model.friction),
-            (lam0, lam1, samples),
-        )
+        return ramp(self, base, unit, max_factor, stop_after_first, samples, max_iterations)
 
     # ---------------------------------------------------------------- results
 
