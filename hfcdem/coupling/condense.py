@@ -198,7 +198,6 @@ def condense(
         col = dolfinx.fem.Function(solid.V)
         solid.solve_load(ksp, a_form, L_form, col)
         columns.append(col)
-    ksp.destroy()
     solid.solves += 1
     return base, columns
 

@@ -47,9 +47,11 @@ from hfcdem.solid.forms import (
     SPRING,
     Loads,
     SolidForms,
+    change_tags,
     combine,
     dg_boundary_conditions,
     interface_tags,
+    interface_values,
     rigid_body_modes,
 )
 from hfcdem.solid.interfaces import (
@@ -58,6 +60,7 @@ from hfcdem.solid.interfaces import (
     stable_facet_hash,
     weibull_scatter,
 )
+from hfcdem.solid.operator import StiffnessOperator
 from hfcdem.solid.reduction import ReducedSystem, glued_facet_set
 from hfcdem.solid.states import OPEN, SLIP, STICK, CascadeStopped, InterfaceStates
 from hfcdem.solvers import DIRECT_CHOLESKY, check_ksp, create_ksp, setup_factorisation
@@ -170,6 +173,12 @@ class CDEMSolid:
         self._recovery = StressRecovery(self.u, material)
         self._reduced: ReducedSystem | None = None
         self._reduced_version = -1
+        self.operator = StiffnessOperator(
+            self.comm,
+            lambda: self.assemble_stiffness()[1],
+            self.assemble_change,
+            self._create_solver,
+        )
         self.solves = 0
         self.solve_seconds = 0.0
         self.events: list[BreakEvent] = []
@@ -322,22 +331,43 @@ class CDEMSolid:
         dolfinx.fem.petsc.set_bc(b, self._bcs)
         return b
 
-    def factorize(self) -> tuple[dolfinx.fem.Form, PETSc.KSP]:
-        """Assemble the stiffness of the current interface states; return its form and solver.
+    def assemble_change(self, old: np.ndarray, new: np.ndarray) -> PETSc.Mat:
+        """Assemble the stiffness change of interfaces whose integral went ``old`` -> ``new``.
 
-        The caller owns the KSP (destroy it when done); :meth:`solve_load` reuses it
-        for any number of right-hand sides.
+        ``old`` and ``new`` hold :func:`~hfcdem.solid.forms.interface_values`; the
+        Dirichlet rows and columns are zero.  The caller destroys the matrix.
+        """
+        tags = change_tags(self.mesh, self.interface_facets, old, new)
+        dS = ufl.Measure("dS", domain=self.mesh, subdomain_data=tags)
+        form = dolfinx.fem.form(self.forms.stiffness_change(dS))
+        dK = dolfinx.fem.petsc.assemble_matrix(form, bcs=self._bcs, diagonal=0.0)
+        dK.assemble()
+        return dK
+
+    def _create_solver(self, A: PETSc.Mat) -> PETSc.KSP:
+        if self.mode == "reduced":
+            return self.reduced_system().create_solver(A)
+        if self.solver_kind == "direct":
+            # factorised here, with more room if MUMPS's dynamic scheduling needs it
+            return setup_factorisation(lambda: self._ksp(A), self.comm)
+        return self._ksp(A)
+
+    def factorize(self) -> tuple[dolfinx.fem.Form, PETSc.KSP]:
+        """Factorise the stiffness of the current interface states; return its form and solver.
+
+        The solid owns the KSP (valid until the next call; :meth:`solve_load` reuses
+        it for any number of right-hand sides).  Between events only the change of
+        the interfaces that changed is assembled and refactorised numerically
+        (:class:`~hfcdem.solid.operator.StiffnessOperator`).
         """
         t0 = time.perf_counter()
-        a_form, A = self.assemble_stiffness()
-        if self.mode == "reduced":
-            ksp = self._reduced_system().factorize(A)
-        elif self.solver_kind == "direct":
-            # factorised here, with more room if MUMPS's dynamic scheduling needs it
-            ksp = setup_factorisation(lambda: self._ksp(A), self.comm)
-        else:
-            ksp = self._ksp(A)
-        A.destroy()  # the KSP keeps its own reference
+        a_form = dolfinx.fem.form(self.forms.stiffness(self._measure()))
+        reduced = self.reduced_system() if self.mode == "reduced" else None
+        ksp = self.operator.solver(
+            interface_values(self.states),
+            self.band.version,
+            reduced.reduce if reduced is not None else None,
+        )
         self.solve_seconds += time.perf_counter() - t0
         return a_form, ksp
 
@@ -352,7 +382,7 @@ class CDEMSolid:
         t0 = time.perf_counter()
         b = self.assemble_load(a_form, L_form)
         if self.mode == "reduced":
-            self._reduced_system().solve(ksp, b, target)
+            self.reduced_system().solve(ksp, b, target)
         else:
             ksp.solve(b, target.x.petsc_vec)
             target.x.scatter_forward()
@@ -371,7 +401,7 @@ class CDEMSolid:
             )
         self.solve_seconds += time.perf_counter() - t0
 
-    def _reduced_system(self) -> ReducedSystem:
+    def reduced_system(self) -> ReducedSystem:
         """Return the reduced system of the current band (rebuilt when the band grew)."""
         if self._reduced is None or self._reduced_version != self.band.version:
             glued = glued_facet_set(self.interface_facets, ~self.band.free)
@@ -385,7 +415,7 @@ class CDEMSolid:
     def num_dofs(self) -> int:
         """Global number of unknowns solved for (reduced or DG)."""
         if self.mode == "reduced":
-            return self._reduced_system().num_dofs
+            return self.reduced_system().num_dofs
         return int(self.V.dofmap.index_map.size_global * self.gdim)
 
     def load_form(self, loads: Loads) -> dolfinx.fem.Form:
@@ -398,7 +428,6 @@ class CDEMSolid:
         for item, target in zip((loads, unit), (self.u, self.u_unit), strict=True):
             if item is not None:
                 self.solve_load(ksp, a_form, self.load_form(item), target)
-        ksp.destroy()
         self.solves += 1
 
     # ------------------------------------------------------------- interfaces

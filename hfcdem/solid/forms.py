@@ -9,7 +9,9 @@ loads, stiffnesses or states never recompile a form.
 
 from __future__ import annotations
 
+import functools
 import math
+import operator
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -63,14 +65,42 @@ def combine(base: Loads, unit: Loads, lam: float) -> Loads:
     )
 
 
+def interface_values(states: InterfaceStates) -> np.ndarray:
+    """Return the integral each interface carries: SPRING, OPEN_FACETS or SLIP_FACETS."""
+    broken = states.state != FacetState.INTACT
+    values = np.full(len(states.state), SPRING, dtype=np.int32)
+    values[broken & (states.contact == OPEN)] = OPEN_FACETS
+    values[broken & (states.contact == SLIP)] = SLIP_FACETS
+    return values
+
+
+def change_code(old: int, new: int) -> int:
+    """Tag of an interface whose integral changed from ``old`` to ``new``."""
+    return 10 * old + new
+
+
+INTERFACE_INTEGRALS = (SPRING, OPEN_FACETS, SLIP_FACETS)
+CHANGES = tuple(
+    (old, new) for old in INTERFACE_INTEGRALS for new in INTERFACE_INTEGRALS if old != new
+)
+
+
+def change_tags(
+    mesh: dolfinx.mesh.Mesh, facets: InterfaceFacets, old: np.ndarray, new: np.ndarray
+) -> dolfinx.mesh.MeshTags:
+    """Tag the interfaces whose integral changed by :func:`change_code` (others untagged)."""
+    changed = old != new
+    idx = facets.facets[changed].astype(np.int32)
+    vals = (10 * old[changed] + new[changed]).astype(np.int32)
+    order = np.argsort(idx)
+    return dolfinx.mesh.meshtags(mesh, mesh.topology.dim - 1, idx[order], vals[order])
+
+
 def interface_tags(
     mesh: dolfinx.mesh.Mesh, facets: InterfaceFacets, states: InterfaceStates
 ) -> dolfinx.mesh.MeshTags:
     """Tag interface facets by their integral: SPRING, OPEN_FACETS, SLIP_FACETS or GLUE."""
-    broken = states.state != FacetState.INTACT
-    values = np.full(facets.num_facets, SPRING, dtype=np.int32)
-    values[broken & (states.contact == OPEN)] = OPEN_FACETS
-    values[broken & (states.contact == SLIP)] = SLIP_FACETS
+    values = interface_values(states)
     glue = facets.glue_facets
     idx = np.concatenate([facets.facets, glue]).astype(np.int32)
     vals = np.concatenate([values, np.full(len(glue), GLUE, dtype=np.int32)])
@@ -107,25 +137,42 @@ class SolidForms:
         lam2mu = material.lame_lambda + 2.0 * material.shear_modulus
         self._glue = dolfinx.fem.Constant(mesh, scalar(nitsche_penalty * lam2mu))
 
-    def stiffness(self, dS: ufl.Measure) -> ufl.Form:
-        """Bilinear form: elasticity, springs by state, Nitsche glue (``dS`` tagged)."""
-        mesh, gdim, material = self.mesh, self.mesh.geometry.dim, self.material
+    def _interface_integrands(self) -> dict[int, ufl.core.expr.Expr]:
+        """Return the integrand of each interface integral (SPRING, OPEN_FACETS, SLIP_FACETS)."""
+        gdim = self.mesh.geometry.dim
         u, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
-        npl = ufl.FacetNormal(mesh)("+")
-        h = ufl.avg(ufl.CellDiameter(mesh))
-        kn = self._kn / h
+        npl = ufl.FacetNormal(self.mesh)("+")
+        kn = self._kn / ufl.avg(ufl.CellDiameter(self.mesh))
         ks = kn * self._ratio
         eye = ufl.Identity(gdim)
         Pn = ufl.outer(npl, npl)
         K = kn * Pn + ks * (eye - Pn)
         ju, jv = ufl.jump(u), ufl.jump(v)
+        return {
+            SPRING: ufl.inner(K * ju, jv),
+            # a residual spring on open and sliding faces keeps detached blocks attached
+            OPEN_FACETS: self._residual * ufl.inner(K * ju, jv),
+            SLIP_FACETS: ufl.inner(kn * Pn * ju, jv)
+            + self._residual * ks * ufl.inner((eye - Pn) * ju, jv),
+        }
+
+    def stiffness_change(self, dS: ufl.Measure) -> ufl.Form:
+        """Bilinear form of the change of interfaces tagged by :func:`change_code`."""
+        terms = self._interface_integrands()
+        changes = [(terms[new] - terms[old]) * dS(change_code(old, new)) for old, new in CHANGES]
+        return functools.reduce(operator.add, changes)
+
+    def stiffness(self, dS: ufl.Measure) -> ufl.Form:
+        """Bilinear form: elasticity, springs by state, Nitsche glue (``dS`` tagged)."""
+        mesh, material = self.mesh, self.material
+        u, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
+        npl = ufl.FacetNormal(mesh)("+")
+        h = ufl.avg(ufl.CellDiameter(mesh))
+        ju, jv = ufl.jump(u), ufl.jump(v)
 
         a = ufl.inner(stress(u, material), strain(v)) * ufl.dx
-        a += ufl.inner(K * ju, jv) * dS(SPRING)
-        a += ufl.inner(kn * Pn * ju, jv) * dS(SLIP_FACETS)
-        # a residual spring on open and sliding faces keeps detached blocks attached
-        a += self._residual * ufl.inner(K * ju, jv) * dS(OPEN_FACETS)
-        a += self._residual * ks * ufl.inner((eye - Pn) * ju, jv) * dS(SLIP_FACETS)
+        for tag, integrand in self._interface_integrands().items():
+            a += integrand * dS(tag)
         # Nitsche glue outside the zone (symmetric interior penalty)
         a += (
             -ufl.inner(ufl.avg(stress(u, material)) * npl, jv)
@@ -247,14 +294,19 @@ def rigid_body_modes(V: dolfinx.fem.FunctionSpace) -> tuple[PETSc.NullSpace, lis
 
 
 __all__ = [
+    "CHANGES",
     "GLUE",
+    "INTERFACE_INTEGRALS",
     "OPEN_FACETS",
     "SLIP_FACETS",
     "SPRING",
     "Loads",
     "SolidForms",
+    "change_code",
+    "change_tags",
     "combine",
     "dg_boundary_conditions",
     "interface_tags",
+    "interface_values",
     "rigid_body_modes",
 ]

@@ -244,19 +244,33 @@ class ReducedSystem:
         """Global number of reduced unknowns."""
         return self.clusters.num_global * self.clusters.bs
 
-    def factorize(self, A: PETSc.Mat) -> PETSc.KSP:
-        """Reduce and factorise the assembled ``A`` (left to the caller); return the KSP."""
+    def reduce(self, A: PETSc.Mat, diagonal: float = 1.0) -> PETSc.Mat:
+        """Return ``P^T A P`` with the held rows and columns set to ``diagonal`` I.
+
+        ``diagonal = 0`` reduces a change of ``A`` that is added to a reduced matrix.
+        """
         t0 = time.perf_counter()
         A_red = self.clusters.reduce_matrix(A)
-        A_red.zeroRowsColumns(self.held, diag=1.0)
+        A_red.zeroRowsColumns(self.held, diag=diagonal)
         A_red.setOption(PETSc.Mat.Option.SYMMETRIC, True)
-        t1 = time.perf_counter()
+        self.seconds["reduce"] = time.perf_counter() - t0
+        return A_red
+
+    def create_solver(self, A_red: PETSc.Mat) -> PETSc.KSP:
+        """Factorise a reduced matrix (MUMPS LDL^T); the caller destroys the KSP."""
+        t0 = time.perf_counter()
         options = {**DIRECT_CHOLESKY, **self.petsc_options}
         ksp = setup_factorisation(
             lambda: create_ksp(A_red, self.prefix, options, self.comm), self.comm
         )
+        self.seconds["factorise"] = time.perf_counter() - t0
+        return ksp
+
+    def factorize(self, A: PETSc.Mat) -> PETSc.KSP:
+        """Reduce and factorise the assembled ``A`` (left to the caller); return the KSP."""
+        A_red = self.reduce(A)
+        ksp = self.create_solver(A_red)
         A_red.destroy()  # the KSP keeps its own reference
-        self.seconds.update(reduce=t1 - t0, factorise=time.perf_counter() - t1)
         return ksp
 
     def solve(self, ksp: PETSc.KSP, b: PETSc.Vec, target: dolfinx.fem.Function) -> None:

@@ -1,0 +1,123 @@
+"""The solid's stiffness, assembled and factorised once, then updated where interfaces changed.
+
+An interface event (a break, a contact switch) changes the integral of a few
+facets only.  Rather than assembling and analysing the whole system again, the
+operator adds the change of those facets, ``dK`` (reduced through ``P`` in the
+reduced mode), to the matrix it keeps.  The sparsity and the KSP stay, so MUMPS
+redoes only its numeric factorisation (no ordering, no symbolic analysis).
+
+It assembles afresh when the structure changes (a new band in the reduced mode),
+when a numeric refactorisation fails, and every ``refresh_every`` updates, so
+round-off of the sums cannot build up.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Hashable
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from hfcdem.solvers import WORKSPACE_ERRORS, mumps_info
+
+Reduce = Callable[[PETSc.Mat, float], PETSc.Mat]
+
+
+class StiffnessOperator:
+    """The assembled (possibly reduced) stiffness and its factorised KSP, kept between events.
+
+    ``assemble()`` returns the whole stiffness (Dirichlet rows and columns set);
+    ``assemble_change(old, new)`` the change of the interfaces whose integral went
+    from ``old`` to ``new`` (Dirichlet rows and columns zero); ``reduce(A,
+    diagonal)`` (or None) maps a DG matrix to the solved one; ``create_solver(A)``
+    factorises it.
+    """
+
+    def __init__(
+        self,
+        comm: MPI.Comm,
+        assemble: Callable[[], PETSc.Mat],
+        assemble_change: Callable[[np.ndarray, np.ndarray], PETSc.Mat],
+        create_solver: Callable[[PETSc.Mat], PETSc.KSP],
+        refresh_every: int = 50,
+    ) -> None:
+        self.comm = comm
+        self._assemble = assemble
+        self._assemble_change = assemble_change
+        self._create_solver = create_solver
+        self.refresh_every = refresh_every
+        self._A: PETSc.Mat | None = None
+        self._ksp: PETSc.KSP | None = None
+        self._values: np.ndarray | None = None
+        self._key: Hashable = None
+        self._updates = 0
+        self.counts = {"assembled": 0, "updated": 0, "unchanged": 0}
+        self.seconds = {"assemble": 0.0, "update": 0.0, "factorise": 0.0}
+
+    def solver(self, values: np.ndarray, key: Hashable, reduce: Reduce | None) -> PETSc.KSP:
+        """Return the factorised KSP of the interfaces' integrals ``values`` (collective).
+
+        ``key`` names the structure (e.g. the band's version): a new key assembles
+        afresh.  The operator owns the KSP; it stays valid until the next call.
+        """
+        values = np.asarray(values).copy()
+        if self._ksp is not None and self._values is not None and key == self._key:
+            changed = int(np.count_nonzero(values != self._values))
+            if self.comm.allreduce(changed, op=MPI.SUM) == 0:
+                self.counts["unchanged"] += 1
+                return self._ksp
+            if self._updates < self.refresh_every and self._update(values, reduce):
+                return self._ksp
+        self._fresh(values, key, reduce)
+        assert self._ksp is not None
+        return self._ksp
+
+    def _fresh(self, values: np.ndarray, key: Hashable, reduce: Reduce | None) -> None:
+        self.destroy()
+        t0 = time.perf_counter()
+        A = self._assemble()
+        if reduce is not None:
+            A_dg, A = A, reduce(A, 1.0)
+            A_dg.destroy()
+        t1 = time.perf_counter()
+        self._ksp = self._create_solver(A)
+        self._A = A
+        self._values, self._key, self._updates = values, key, 0
+        self.counts["assembled"] += 1
+        self.seconds["assemble"] += t1 - t0
+        self.seconds["factorise"] += time.perf_counter() - t1
+
+    def _update(self, values: np.ndarray, reduce: Reduce | None) -> bool:
+        """Add the change to the kept matrix and refactorise numerically; False if that failed."""
+        assert self._A is not None and self._ksp is not None and self._values is not None
+        t0 = time.perf_counter()
+        dK = self._assemble_change(self._values, values)
+        if reduce is not None:
+            dK_dg, dK = dK, reduce(dK, 0.0)
+            dK_dg.destroy()
+        self._A.axpy(1.0, dK, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        dK.destroy()
+        t1 = time.perf_counter()
+        self._ksp.setOperators(self._A)
+        self._ksp.setUp()  # same sparsity: MUMPS keeps its analysis
+        codes = [c for c in self.comm.allgather(mumps_info(self._ksp)) if c is not None]
+        self.seconds["update"] += t1 - t0
+        self.seconds["factorise"] += time.perf_counter() - t1
+        if codes and (min(codes) in WORKSPACE_ERRORS or min(codes) < 0):
+            return False  # assembled afresh with more room by the caller
+        self._values = values
+        self._updates += 1
+        self.counts["updated"] += 1
+        return True
+
+    def destroy(self) -> None:
+        """Free the kept matrix and KSP."""
+        for obj in (self._ksp, self._A):
+            if obj is not None:
+                obj.destroy()
+        self._ksp, self._A, self._values = None, None, None
+
+
+__all__ = ["StiffnessOperator"]
