@@ -141,3 +141,10 @@ def test_the_measure_of_each_swept_key():
     diameters = scene.geometry.perforations[0].profile.diameters
     expected = sum(min(mesh.size, 3.141592653589793 * d / mesh.circle_elements) for d in diameters)
     assert characteristic_size(scene) == pytest.approx(expected / len(diameters))
+
+
+def test_the_solid_study_sweeps_the_full_and_the_reduced_solid():
+    study = load_convergence("studies/perforation_no2_solid.toml")
+    assert study.measure is None  # names: the table gives the spread
+    modes = [study.case_scene(k).physics.solver.solid for k in range(len(study.values))]
+    assert modes == ["full", "reduced"]
