@@ -10,6 +10,7 @@ from tiny_solid import break_crack, crack_facets, tiny_solid
 
 from hfcdem.coupling.checkpoint import (
     SCALARS,
+    band_rows,
     checkpoint_data,
     fluid_from_tables,
     fluid_tables,
@@ -44,8 +45,9 @@ def test_the_checkpoint_layout():
     assert SCALARS[0] == "t" and "_last_ratio" in SCALARS and len(SCALARS) == 12
     solid = tiny_solid()
     data = checkpoint_data({"t": 1.0}, solid, _fluid())
-    assert list(data) == ["scalars", "interfaces", "content", "wet_since", "pressure"]
+    assert list(data) == ["scalars", "interfaces", "band", "content", "wet_since", "pressure"]
     assert data["scalars"] == {"t": 1.0} and data["interfaces"] == []
+    assert data["band"] == []  # the full solid: every interface free, nothing to keep
 
 
 def test_interfaces_round_trip_through_a_fresh_solid():
@@ -61,3 +63,17 @@ def test_interfaces_round_trip_through_a_fresh_solid():
     assert fresh.state[crack].tolist() == [1, 1]
     assert int(np.sum(fresh.state != 0)) == 2
     assert interface_rows(fresh) == rows
+
+
+def test_the_reduced_band_round_trips_through_a_fresh_solid():
+    broken = tiny_solid(mode="reduced")
+    break_crack(broken)  # frees the crack and two vertex rings around it
+    rows = band_rows(broken)
+    assert len(rows) == broken.band.count() > 2
+    data = json.loads(json.dumps(checkpoint_data({"t": 2.0}, broken, _fluid())))
+    fresh = tiny_solid(MPI.COMM_SELF, mode="reduced")
+    assert fresh.band.count() == 0
+    read_checkpoint(data, fresh)
+    assert band_rows(fresh) == rows
+    older = {k: v for k, v in data.items() if k != "band"}  # a checkpoint of before
+    read_checkpoint(older, tiny_solid(MPI.COMM_SELF, mode="reduced"))

@@ -55,7 +55,9 @@ def unit_block(dim: int, comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
     return TaggedMesh(mesh, cell_tags, facet_tags, {"rock": 1}, names)
 
 
-def tiny_solid(comm: MPI.Comm = MPI.COMM_WORLD, stress: float = 1e6) -> CDEMSolid:
+def tiny_solid(
+    comm: MPI.Comm = MPI.COMM_WORLD, stress: float = 1e6, mode: str = "full"
+) -> CDEMSolid:
     """Rock in [0, 2] x [0, 1]: wall 'left' (x = 0), 'right' (x = 2) fixed."""
     mesh = dolfinx.mesh.create_rectangle(
         comm, [[0.0, 0.0], [2.0, 1.0]], [4, 2], ghost_mode=dolfinx.mesh.GhostMode.shared_facet
@@ -67,6 +69,7 @@ def tiny_solid(comm: MPI.Comm = MPI.COMM_WORLD, stress: float = 1e6) -> CDEMSoli
         InSituStress(stress, 0.5 * stress),
         InterfaceModel(alpha=100, tensile_strength=1e6),
         fixed=("right",),
+        mode=mode,
     )
 
 

@@ -62,6 +62,23 @@ def restore_interfaces(solid: CDEMSolid, rows: list[list[Any]]) -> None:
             solid.friction_traction[i] = friction
 
 
+def band_rows(solid: CDEMSolid) -> list[list[int]]:
+    """Keys of the free interfaces of a reduced solid (empty for the full one; collective)."""
+    if solid.mode == "full":
+        return []
+    sel = np.flatnonzero(solid.band.free & solid.owned)
+    rows = [sorted(int(v) for v in solid.vertex_ids[i]) for i in sel]
+    return sorted(r for part in solid.comm.allgather(rows) for r in part)
+
+
+def restore_band(solid: CDEMSolid, rows: list[list[int]]) -> None:
+    """Free the interfaces among ``rows`` (of :func:`band_rows`); collective."""
+    ids = np.sort(np.asarray(solid.vertex_ids, dtype=np.int64), axis=1)
+    keys = {tuple(int(v) for v in row) for row in rows}
+    flags = np.array([tuple(int(v) for v in ids[i]) in keys for i in range(len(ids))], dtype=bool)
+    solid.free_interfaces(flags)
+
+
 def _table(values: dict[Key, float]) -> list[list[Any]]:
     return [[list(k), v] for k, v in sorted(values.items())]
 
@@ -91,21 +108,28 @@ def checkpoint_data(
     scalars: Mapping[str, Any], solid: CDEMSolid, fluid: FluidState
 ) -> dict[str, Any]:
     """Return the checkpoint (the same on every rank, JSON-ready; collective)."""
-    return {"scalars": dict(scalars), "interfaces": interface_rows(solid)} | fluid_tables(fluid)
+    return {
+        "scalars": dict(scalars),
+        "interfaces": interface_rows(solid),
+        "band": band_rows(solid),
+    } | fluid_tables(fluid)
 
 
 def read_checkpoint(data: Mapping[str, Any], solid: CDEMSolid) -> tuple[dict, FluidState]:
     """Set the solid's interface states from ``data``; return its scalars and fluid record."""
     restore_interfaces(solid, data["interfaces"])
+    restore_band(solid, data.get("band", []))  # older checkpoints: regrown by screening
     return dict(data["scalars"]), fluid_from_tables(data)
 
 
 __all__ = [
     "SCALARS",
+    "band_rows",
     "checkpoint_data",
     "fluid_from_tables",
     "fluid_tables",
     "interface_rows",
     "read_checkpoint",
+    "restore_band",
     "restore_interfaces",
 ]
