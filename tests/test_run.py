@@ -198,6 +198,22 @@ def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
     assert pressures(out) == pytest.approx(pressures(straight), rel=1e-9)
 
 
+def test_a_reduced_run_resumes_on_the_band_it_had(shared_tmp_path):
+    # the borehole cracks at about 12.7 s; stopped after it, the band holds the crack,
+    # its rings and the walls: the resumed run solves the same system as the straight one
+    scene = load_scene(BOREHOLE, "coarse", overrides={"solver.solid": "reduced"})
+    straight = run_scene(scene, shared_tmp_path / "straight")
+    out = shared_tmp_path / "resumed"
+    with pytest.raises(_Interrupt):
+        run_scene(scene, out, observers=[StopAt(13.0)])
+    data = json.loads((out / "checkpoint.json").read_text())
+    assert data["interfaces"] and len(data["band"]) > len(data["interfaces"])
+    resumed = run_scene(scene, out, resume=True)
+    assert resumed["free_interfaces"] == straight["free_interfaces"]
+    assert resumed["tensile_failures"] == straight["tensile_failures"]
+    assert _pressures(out) == pytest.approx(_pressures(shared_tmp_path / "straight"), rel=1e-9)
+
+
 def _pressures(path):
     lines = (path / "history.csv").read_text().splitlines()
     col = lines[0].split(",").index("injection_pressure")
