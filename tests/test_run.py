@@ -211,7 +211,8 @@ def test_a_reduced_run_resumes_on_the_band_it_had(shared_tmp_path):
     resumed = run_scene(scene, out, resume=True)
     assert resumed["free_interfaces"] == straight["free_interfaces"]
     assert resumed["tensile_failures"] == straight["tensile_failures"]
-    assert _pressures(out) == pytest.approx(_pressures(shared_tmp_path / "straight"), rel=1e-9)
+    # in-place updates after the resume sum in another order: 1.1e-8 measured on 2 ranks
+    assert _pressures(out) == pytest.approx(_pressures(shared_tmp_path / "straight"), rel=5e-8)
 
 
 def _pressures(path):
