@@ -65,6 +65,10 @@ def test_borehole_scene_breaks_at_the_wall_near_hubbert_willis(shared_tmp_path):
     assert np.all(angle < 5.0), angle  # along SH (x), on both sides of the borehole
     assert np.all(np.hypot(*first.midpoints[:, :2].T) < 0.03 + 4 * 0.006)  # in the wall rings
     assert summary["peak_pressure_MPa"] * 1e6 < hw  # the cracked wall holds less
+    # every rebuild has its cause: the start, breaks, and contact switches after them
+    causes = summary["rebuild_causes"]
+    assert sum(causes.values()) == summary["rebuilds"]
+    assert causes["start"] == 1 and causes["break"] >= 1
 
 
 def test_the_reduced_solid_reproduces_the_full_borehole_run(shared_tmp_path):
@@ -182,6 +186,8 @@ def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
     assert summary["first_crack"]["point_m"] == pytest.approx(first["first_crack"]["point_m"])
     assert summary["initial_failures"] == first["initial_failures"]
     assert summary["rebuilds"] >= first["rebuilds"]
+    causes = summary["rebuild_causes"]  # kept through the checkpoint, plus the resume
+    assert sum(causes.values()) == summary["rebuilds"] and causes["resume"] == 1
     # the interface frames written before the stop are kept, the series goes on
     frames = read_pvd(out / "interfaces.pvd")
     assert frames[: len(frames_before)] == frames_before

@@ -23,6 +23,7 @@ joint, so it is not split further before then.
 
 from __future__ import annotations
 
+import collections
 import math
 import os
 import time
@@ -114,6 +115,8 @@ class HydraulicFracture:
         self.leaked = 0.0
         self.rebuilds = 0
         self.rebuild_seconds = 0.0
+        # what caused each rebuild (start, contact, break, band, fill, retry, resume)
+        self.rebuild_causes: collections.Counter[str] = collections.Counter()
         self.first_break_time: float | None = None
         self.initial_failures = 0
         self.wall_start = time.perf_counter()
@@ -189,18 +192,18 @@ class HydraulicFracture:
     def _store_state(self) -> None:
         self.facet_fluid.store(self.network.keys, self.content, self.wet_since, self.pressure)
 
-    def _recondense(self) -> None:
+    def _recondense(self, cause: str) -> None:
         """Record the fluid of the network and rebuild it for changed states."""
         self._store_state()
-        self.rebuild()
+        self.rebuild(cause)
 
     # ------------------------------------------------------------ operator
 
-    def rebuild(self) -> None:
+    def rebuild(self, cause: str = "start") -> None:
         """Refactorise the solid and recondense for the current interface states.
 
-        Runs of :meth:`step` call it at every interface event; a benchmark calls it
-        to time one event.
+        Runs of :meth:`step` call it at every interface event (``cause`` names it
+        in :attr:`rebuild_causes`); a benchmark calls it to time one event.
         """
         t0 = time.perf_counter()
         self._rebuild_network()
@@ -241,6 +244,7 @@ class HydraulicFracture:
             self.injection.rate_controlled,
         )
         self.rebuilds += 1
+        self.rebuild_causes[cause] += 1
         self.rebuild_seconds += time.perf_counter() - t0
 
     # ---------------------------------------------------------------- flow
@@ -350,7 +354,7 @@ class HydraulicFracture:
         self.facet_fluid.restore(saved.fluid)
         self.first_break_time = saved.first_break_time
         if changed:
-            self.rebuild()
+            self.rebuild("retry")
 
     def _try_step(self, dt: float) -> StepRecord | float | None:
         """Attempt a step of ``dt``, repeating it until the interface states settle.
@@ -393,7 +397,7 @@ class HydraulicFracture:
             if grown:  # reduced mode: facets near their strength get their own springs
                 self._last_change = f"band grew by {grown}"
                 changed_states = True
-                self._recondense()
+                self._recondense("band")
                 continue
             self._trial_pressure = self.balance.facet_pressure(p)
             ratio, mode = solid.overstress(loads)
@@ -444,7 +448,7 @@ class HydraulicFracture:
         self.wet_since[drained] = math.inf
         self.wet_since[full] = t1
         self.wet = np.isfinite(self.wet_since)
-        self._recondense()
+        self._recondense("fill")
         return True
 
     def _switch_contacts(self, loads: Loads, rounds: int) -> int:
@@ -452,7 +456,7 @@ class HydraulicFracture:
         switched = switch_contacts(self.solid, loads, rounds >= _CONTACT_ROUNDS)
         if switched:
             self._last_change = f"{switched} contacts switched"
-            self._recondense()
+            self._recondense("contact")
         return switched
 
     def _break(self, ratio: np.ndarray, mode: np.ndarray, t1: float) -> bool:
@@ -466,7 +470,7 @@ class HydraulicFracture:
         self.solid.break_facets(chosen, mode[chosen], t1)
         if self.first_break_time is None:
             self.first_break_time = t1
-        self._recondense()
+        self._recondense("break")
         return True
 
     def _leak(self, t1: float) -> np.ndarray:
@@ -511,7 +515,7 @@ class HydraulicFracture:
         self.t = t1
         self._store_state()
         if fills:
-            self.rebuild()
+            self.rebuild("fill")
         rec = self._record(t1, dt, vf, iterations[0])
         if not (math.isfinite(rec.injection_pressure) and np.all(np.isfinite(self.pressure))):
             raise SimulationStopped(f"non-finite pressure at t = {t1:.6g} s")
@@ -633,6 +637,7 @@ class HydraulicFracture:
         on another number of ranks (:mod:`~hfcdem.coupling.checkpoint`).
         """
         scalars = {k: getattr(self, k) for k in SCALARS}
+        scalars["rebuild_causes"] = dict(self.rebuild_causes)
         return checkpoint_data(scalars, self.solid, self.facet_fluid)
 
     def restore(self, data: dict, history: list[StepRecord] | None = None) -> None:
@@ -642,12 +647,14 @@ class HydraulicFracture:
         ``history.csv`` (or an older checkpoint's ``history``).
         """
         scalars, self.facet_fluid = read_checkpoint(data, self.solid)
+        causes = scalars.pop("rebuild_causes", {})  # older checkpoints have none
         for k, v in scalars.items():
             setattr(self, k, v)
+        self.rebuild_causes = collections.Counter(causes)
         if history is None:
             history = [StepRecord.from_row(row) for row in data.get("history", [])]
         self.history = list(history)
-        self.rebuild()
+        self.rebuild("resume")
 
     def write_history(self, path: str | os.PathLike[str]) -> None:
         """Write the step records as CSV (rank 0, atomically: a stopped run keeps it)."""

@@ -329,6 +329,7 @@ def _summarise(
         "steps": len(frac.history),
         "rebuilds": frac.rebuilds,
         "rebuild_seconds": frac.rebuild_seconds,
+        "rebuild_causes": dict(frac.rebuild_causes),  # contact, break, band, fill, ...
         "solid": solid.mode,
         "free_interfaces": solid.band.count(),
         "solved_unknowns": solid.num_dofs,  # at the end (reduced: grows with the band)
