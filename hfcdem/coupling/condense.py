@@ -214,17 +214,26 @@ def network_openings(solid: CDEMSolid, view: NetworkView, u: dolfinx.fem.Functio
     return view.gather(w, solid.comm)
 
 
-def closure_offsets(solid: CDEMSolid, view: NetworkView) -> tuple[np.ndarray, np.ndarray]:
-    """Intact pre-compression offset of each broken network facet, and its closure stress.
+def closure_offsets(
+    solid: CDEMSolid, view: NetworkView
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Offset, closure stress and contact compliance of each network facet.
 
-    The closure stress is the in-situ normal stress, compression positive.
+    The offset is the intact pre-compression offset of a broken facet; the
+    closure stress the in-situ normal stress, compression positive; the contact
+    compliance ``1/kn`` of a broken facet (0 for a pre-existing crack): the
+    overlap its springs would take per pascal of contact pressure, by which an
+    open face under fluid pressure p counts its void (``w - offset + p/kn``),
+    so void and contact switch on one quantity (:meth:`CDEMSolid.update_contact`).
     """
     sel = view.facets[view.owned]
     n = solid.normals[sel]
     t0n = np.einsum("fi,ij,fj->f", n, solid.sigma0, n)
-    off = np.where((t0n < 0.0) & ~solid.is_crack[sel], -t0n / solid.kn[sel], 0.0)
-    out = view.gather(np.column_stack([off, -t0n]).reshape(-1, 2), solid.comm)
-    return out[:, 0], out[:, 1]
+    broken = ~solid.is_crack[sel]
+    off = np.where((t0n < 0.0) & broken, -t0n / solid.kn[sel], 0.0)
+    compliance = np.where(broken, 1.0 / solid.kn[sel], 0.0)
+    out = view.gather(np.column_stack([off, -t0n, compliance]).reshape(-1, 3), solid.comm)
+    return out[:, 0], out[:, 1], out[:, 2]
 
 
 def group_volumes(

@@ -137,15 +137,19 @@ def network_volumes(
     condensed: tuple[dolfinx.fem.Function, list[dolfinx.fem.Function]],
     residual_aperture: float,
     cavity_form: dolfinx.fem.Form | None,
+    group: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
     """Void volumes of the network's facets and the cavity, linear in the group pressures.
 
     ``condensed``: the base state and group responses of :func:`condense_network`.
     Returns v0, h, hc and the base state's wall motion (see
     :func:`~hfcdem.coupling.condense.group_volumes`), and the closure stress of
-    every network facet (in-situ normal stress, compression positive).
+    every network facet (in-situ normal stress, compression positive).  With the
+    pressure ``group`` of each facet, an open broken facet also counts its
+    contact compliance: ``area / kn`` per pascal of its group's pressure
+    (:func:`~hfcdem.coupling.condense.closure_offsets`).
     """
-    offsets, closure = closure_offsets(solid, network.view)
+    offsets, closure, compliance = closure_offsets(solid, network.view)
     base, columns = condensed
     v0, h, hc, wall = group_volumes(
         solid,
@@ -156,6 +160,9 @@ def network_volumes(
         (network.is_open, network.net.area, residual_aperture),
         cavity_form,
     )
+    if group is not None:
+        rows = np.flatnonzero(network.is_open & (group >= 0) & (compliance > 0.0))
+        h[rows, group[rows]] += network.net.area[rows] * compliance[rows]
     return v0, h, hc, wall, closure
 
 

@@ -226,6 +226,7 @@ class HydraulicFracture:
             (base, columns),
             self.fluid.residual_aperture,
             self._cav_form if track else None,
+            self.group,
         )
         if self._cavity_reference is None:
             # the mesh (and cavity_volume) is the cavity as it stands at the start, after

@@ -473,9 +473,12 @@ class CDEMSolid:
             tn_rec, shear_rec = self._recovery.tractions(self.interface_facets, s0, glued)
             tn = np.where(glued, tn_rec, tn)
             tau_vec = np.where(glued[:, None], shear_rec, tau_vec)
-        # physical aperture of an open facet: the pre-compression offset removed
+        # physical aperture of an open facet: the pre-compression offset removed, the
+        # contact overlap of its fluid pressure added (coupling.condense.closure_offsets)
+        broken = ~self.is_crack
         offset = np.where(t0n < 0.0, -t0n / self.kn, 0.0)
-        opening = np.where(intact_like, w, np.maximum(w - offset * (~self.is_crack), 0.0))
+        overlap = np.maximum(self._crack_pressure(loads), 0.0) / self.kn
+        opening = np.where(intact_like, w, np.maximum(w - (offset - overlap) * broken, 0.0))
         return InterfaceSnapshot(
             opening=opening,
             slip=np.linalg.norm(jt, axis=1),
@@ -492,18 +495,23 @@ class CDEMSolid:
         snap = self.snapshot(loads)
         broken = (self.state != FacetState.INTACT) & ~self.is_crack
         old = self.contact.copy()
-        # open facets close when the faces interpenetrate past the pre-compression offset
+        # Both directions compare one quantity with the fluid pressure p: the normal
+        # spring traction t0n + kn w.  A closed face opens when its springs hold less
+        # compression than p; an open one closes when its springs, were they there,
+        # would push back harder than p (w < offset - p/kn).  Closing on w < offset
+        # instead left a band of p/kn where each state sent a facet to the other.
         t0n = np.einsum(
             "fi,ij,fj->f", self.normals, loads.in_situ_factor * self.sigma0, self.normals
         )
         w_raw = -np.einsum("fi,fi->f", self.jumps(self.u), self.normals)
+        pressure = self._crack_pressure(loads)
         offset = np.where(t0n < 0.0, -t0n / self.kn, 0.0)
         self.states.switch_contacts(
             broken,
             snap.normal_traction,
             snap.shear_vector,
-            self._crack_pressure(loads),
-            w_raw < offset,
+            pressure,
+            w_raw < offset - np.maximum(pressure, 0.0) / self.kn,
             self.model.friction,
         )
         changed = int(np.count_nonzero((old != self.contact) & self.owned))
