@@ -70,3 +70,17 @@ def test_void_volumes_are_linear_with_a_symmetric_compliance():
     np.testing.assert_allclose(h @ p, network.net.area * opened, rtol=1e-8)
     # the in-situ SH = 1 MPa along x closes the crack on x = 1 (compression positive)
     np.testing.assert_allclose(closure, [1e6, 1e6], rtol=1e-9)
+
+
+def test_open_broken_facets_count_the_overlap_of_their_own_pressure():
+    """With their groups, open broken facets add area / kn per pascal of their own group."""
+    solid, network, group, base, columns = _condensed()
+    _, h0, _, _, _ = network_volumes(solid, network, (base, columns), 0.0, None)
+    _, h, _, _, _ = network_volumes(solid, network, (base, columns), 0.0, None, group)
+    view = network.view
+    kn = view.gather(solid.kn[view.facets[view.owned]], solid.comm)  # the whole network
+    extra = np.zeros_like(h)
+    extra[[0, 1], group] = network.net.area / kn
+    # h - h0 cancels 6 digits of h (area / kn is 1/alpha of the rock's compliance)
+    np.testing.assert_allclose(h - h0, extra, rtol=1e-6, atol=1e-30)
+    assert h[0, 2] == pytest.approx(h[1, 1], rel=1e-8)  # still symmetric (Betti)

@@ -10,7 +10,14 @@ from hfcdem.coupling.records import SimulationStopped
 from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.interfaces import FacetState
-from hfcdem.solid.states import OPEN, SLIP, STICK, CascadeStopped, InterfaceStates
+from hfcdem.solid.states import (
+    OPEN,
+    SLIP,
+    STICK,
+    CascadeStopped,
+    InterfaceStates,
+    faces_overlap,
+)
 
 
 def test_initial_states_cracks_open_rest_intact_and_stuck():
@@ -66,6 +73,61 @@ def test_open_faces_close_only_when_they_interpenetrate():
     tn = np.array([-1e6, -1e6])
     s.switch_contacts(broken, tn, np.zeros((2, 2)), np.zeros(2), np.array([True, False]), 0.5)
     assert list(s.contact) == [STICK, OPEN]
+
+
+def test_wet_open_faces_close_only_past_the_overlap_their_pressure_would_take():
+    kn, p = 1e13, 5e6  # the springs would overlap by p / kn = 0.5 um at the fluid pressure
+    gap = np.array([-0.4e-6, -0.6e-6, -1e-12, 1e-7])
+    closing = faces_overlap(gap, np.array([p, p, 0.0, p]), kn)
+    assert list(closing) == [False, True, True, False]
+    assert faces_overlap(np.array([-1e-12]), np.array([-1e6]), kn)[0]  # suction adds no band
+
+
+def _one_facet_model(closing_rule):
+    """Contact states of a facet in a 1-DOF surrounding, iterated as the coupled step does.
+
+    Separation w (spring extension from the in-situ state, opening positive) obeys
+    w = d - C sigma + C T under a face compression T: spring T = sigma - kn w (stuck),
+    fluid T = p (open).  Returns the states of 4 switch rounds from both starts, over
+    a grid of loads d, pressures p and stiffness ratios kn C (the No. 2 chatter had
+    kn C = 18, sigma = 60.25 MPa, p = 62.1 MPa).
+    """
+    sigma, kn = 60.25e6, 7.6e13
+    d, p, knc = np.meshgrid(
+        np.linspace(-2e-7, 2e-7, 21), np.linspace(50e6, 70e6, 21), [0.5, 5.0, 18.0, 200.0]
+    )
+    d, p, C = d.ravel(), p.ravel(), knc.ravel() / kn
+    count = len(d)
+    rounds = []
+    for start in (OPEN, STICK):
+        states = InterfaceStates(
+            np.full(count, FacetState.TENSILE, np.int8),
+            np.full(count, start, np.int8),
+            np.zeros((count, 2)),
+        )
+        seen = [states.contact.copy()]
+        for _ in range(4):
+            stuck = states.contact != OPEN
+            w = np.where(stuck, d / (1 + C * kn), d - C * sigma + C * p)
+            tn = np.where(stuck, -sigma + kn * w, -p)
+            gap = w - sigma / kn
+            closing = closing_rule(gap, p, kn)
+            states.switch_contacts(np.ones(count, bool), tn, np.zeros((count, 2)), p, closing, 0.6)
+            seen.append(states.contact.copy())
+        rounds.append(np.array(seen))
+    return rounds, (d, p, C, sigma, kn)
+
+
+def test_contact_switches_settle_in_one_round_on_one_quantity():
+    rounds, (d, p, C, sigma, kn) = _one_facet_model(faces_overlap)
+    open_ = p > sigma - kn * d / (1 + C * kn)  # the stuck state's traction is below -p
+    for seen in rounds:
+        assert np.all(seen[1:] == seen[1])  # one switch at most, then settled
+        assert np.array_equal(seen[-1] == OPEN, open_)
+    # closing on overlap alone (gap < 0) sends stiff surroundings to and fro
+    chatter, _ = _one_facet_model(lambda gap, p, kn: gap < 0.0)
+    flips = np.any(chatter[0][2:] != chatter[0][1:-1], axis=0)
+    assert flips.any() and np.all(C[flips] * kn <= 18.0)
 
 
 def test_coulomb_decides_stick_or_slip_and_friction_opposes_nothing_else():

@@ -62,7 +62,7 @@ from hfcdem.solid.interfaces import (
 )
 from hfcdem.solid.operator import StiffnessOperator
 from hfcdem.solid.reduction import ReducedSystem, glued_facet_set
-from hfcdem.solid.states import OPEN, SLIP, STICK, CascadeStopped, InterfaceStates
+from hfcdem.solid.states import OPEN, SLIP, STICK, CascadeStopped, InterfaceStates, faces_overlap
 from hfcdem.solvers import DIRECT_CHOLESKY, check_ksp, create_ksp, setup_factorisation
 
 # solver="auto": direct (MUMPS) up to this many unknowns, CG + GAMG beyond
@@ -495,11 +495,8 @@ class CDEMSolid:
         snap = self.snapshot(loads)
         broken = (self.state != FacetState.INTACT) & ~self.is_crack
         old = self.contact.copy()
-        # Both directions compare one quantity with the fluid pressure p: the normal
-        # spring traction t0n + kn w.  A closed face opens when its springs hold less
-        # compression than p; an open one closes when its springs, were they there,
-        # would push back harder than p (w < offset - p/kn).  Closing on w < offset
-        # instead left a band of p/kn where each state sent a facet to the other.
+        # both directions compare the normal spring traction t0n + kn w with the fluid
+        # pressure (faces_overlap)
         t0n = np.einsum(
             "fi,ij,fj->f", self.normals, loads.in_situ_factor * self.sigma0, self.normals
         )
@@ -511,7 +508,7 @@ class CDEMSolid:
             snap.normal_traction,
             snap.shear_vector,
             pressure,
-            w_raw < offset - np.maximum(pressure, 0.0) / self.kn,
+            faces_overlap(w_raw - offset, pressure, self.kn),
             self.model.friction,
         )
         changed = int(np.count_nonzero((old != self.contact) & self.owned))

@@ -50,6 +50,21 @@ class CascadeStopped(SimulationStopped):
         )
 
 
+def faces_overlap(gap: np.ndarray, pressure: np.ndarray, kn: np.ndarray) -> np.ndarray:
+    """Open faces that close: those whose springs would push back harder than the fluid.
+
+    ``gap`` is the mechanical opening past the pre-compression offset (negative:
+    the faces overlap), ``pressure`` the fluid pressure on the faces, ``kn`` the
+    normal spring stiffness.  A closed face opens when its spring traction holds
+    less compression than the fluid pressure
+    (:meth:`InterfaceStates.switch_contacts`); an open one closes when its
+    springs, were they there, would hold more: ``kn (-gap) > p``.  Closing on
+    ``gap < 0`` instead leaves a band ``-p/kn < gap < 0`` where each state sends
+    the facet to the other (chatter).
+    """
+    return np.asarray(gap) < -np.maximum(np.asarray(pressure, dtype=float), 0.0) / kn
+
+
 @dataclass(eq=False)
 class InterfaceStates:
     """Failure state, contact sub-state and friction traction per interface facet."""
@@ -101,7 +116,7 @@ class InterfaceStates:
 
         ``normal_traction`` and ``shear_vector`` are the tractions at the current
         states, ``pressure`` the fluid pressure per facet, ``closing`` the open
-        facets whose faces interpenetrate.
+        facets whose faces interpenetrate (:func:`faces_overlap`).
         """
         old = self.contact.copy()
         # closed facets open when their normal traction exceeds the fluid pressure
@@ -134,4 +149,4 @@ class InterfaceStates:
         self.contact[:] = arr[facets, 1].astype(np.int8)
 
 
-__all__ = ["OPEN", "SLIP", "STICK", "CascadeStopped", "InterfaceStates"]
+__all__ = ["OPEN", "SLIP", "STICK", "CascadeStopped", "InterfaceStates", "faces_overlap"]
