@@ -152,6 +152,8 @@ def test_bad_input_is_refused():
     net = joint_network(solid, cavity_vertices(solid, ["left"], None))
     with pytest.raises(ValueError, match=r"aperture .* > 0 m"):
         JointSeepage(net, -5e-6, FLUID)
+    with pytest.raises(ValueError, match=r"aperture must be one value or"):
+        JointSeepage(net, np.full(net.size + 1, INITIAL_JOINT_APERTURE), FLUID)
     sp = JointSeepage(net, INITIAL_JOINT_APERTURE, FLUID)
     for dt in (0.0, -1.0):
         with pytest.raises(ValueError, match=r"dt must be > 0 s"):

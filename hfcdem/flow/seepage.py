@@ -88,9 +88,12 @@ class JointSeepage:
         pressure: float | np.ndarray = 0.0,
     ) -> None:
         n = net.size
-        ap = np.broadcast_to(np.asarray(aperture, dtype=float), (n,)).copy()
-        if not (np.all(np.isfinite(ap)) and np.all(ap > 0.0)):
-            raise ValueError("aperture must be finite and > 0 m on every facet")
+        ap = np.asarray(aperture, dtype=float)
+        if ap.ndim not in (0, 1) or (ap.ndim == 1 and ap.shape != (n,)):
+            raise ValueError(f"aperture must be one value or {n} values (m)")
+        ap = np.broadcast_to(ap, (n,)).copy()
+        if n and not (np.all(np.isfinite(ap)) and ap.min() > 0.0):
+            raise ValueError(f"aperture must be finite and > 0 m on every facet, min {ap.min()!r}")
         self.net = net
         self.fluid = fluid
         self.aperture = ap
