@@ -4,7 +4,9 @@
 :mod:`hfcdem.config.materials`);
 ``network`` turns broken facets into finite-volume cells joined at shared
 edges (3D) or vertices (2D) for the cubic law; ``balance`` is the mass balance
-of the pressure groups on it (plain NumPy) and ``newton`` solves it (SNES).
+of the pressure groups on it (plain NumPy) and ``newton`` solves it (SNES);
+``seepage`` is transient flow through intact joints of given aperture (not yet
+coupled to the solid).
 """
 
 __all__: list[str] = []
