@@ -31,6 +31,9 @@ from hfcdem.solid.cdem import CDEMSolid
 #: initial hydraulic aperture of the intact joints (perforation paper, Table 1), m
 INITIAL_JOINT_APERTURE = 5e-6
 
+#: PETSc options prefix of the seepage solve (the command line may override it)
+PREFIX = "hfcdem_seepage_"
+
 
 def joint_network(
     solid: CDEMSolid, cavity_vertices: np.ndarray, facets: Sequence[int] | np.ndarray | None = None
@@ -148,6 +151,7 @@ class JointSeepage:
             return np.zeros(0)
         rhs = self.storage / dt * self._pressure + self._cavity_load(pc)
         if self._solver is None or self._solver[0] != dt:
+            self.destroy()
             self._solver = (dt, _lu(self._csr, self._diag, self.storage / dt))
         new = _solve(self._solver[1], rhs)
         self._injected = dt * float(self.inflow(pc, new).sum())
@@ -165,7 +169,19 @@ class JointSeepage:
         if self.net.size == 0:
             return np.zeros(0)
         ksp = _lu(self._csr, self._diag, np.zeros(self.net.size))
-        return _solve(ksp, self._cavity_load(pc))
+        try:
+            return _solve(ksp, self._cavity_load(pc))
+        finally:
+            ksp.getOperators()[0].destroy()
+            ksp.destroy()
+
+    def destroy(self) -> None:
+        """Free the kept factorisation (a new time step size factorises again)."""
+        if self._solver is not None:
+            ksp = self._solver[1]
+            ksp.getOperators()[0].destroy()
+            ksp.destroy()
+            self._solver = None
 
     def _cavity_load(self, pc: np.ndarray) -> np.ndarray:
         load = np.zeros(self.net.size)
@@ -225,9 +241,11 @@ def _lu(
     )
     mat.assemble()
     ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+    ksp.setOptionsPrefix(PREFIX)
     ksp.setOperators(mat)
     ksp.setType("preonly")
     ksp.getPC().setType("lu")
+    ksp.setFromOptions()  # e.g. -hfcdem_seepage_pc_factor_mat_solver_type mumps
     ksp.setUp()
     return ksp
 
@@ -246,6 +264,7 @@ def _solve(ksp: PETSc.KSP, rhs: np.ndarray) -> np.ndarray:
 
 __all__ = [
     "INITIAL_JOINT_APERTURE",
+    "PREFIX",
     "JointSeepage",
     "joint_network",
 ]
