@@ -327,10 +327,58 @@ def _add_study(sub: Any) -> None:
     study.set_defaults(func=_study)
 
 
+def split_petsc_options(argv: Sequence[str]) -> tuple[list[str], dict[str, str]]:
+    """Split ``argv`` into the command's own arguments and PETSc options.
+
+    A PETSc option is a single dash and a name with an underscore
+    (``-hfcdem_solid_pc_factor_mat_solver_type``, ``-mat_mumps_icntl_14``,
+    ``-log_view``), with the next token as its value unless that is an option
+    (a flag gets the empty value).  Returns the remaining arguments and the
+    options by name (without the dash).
+    """
+    ours: list[str] = []
+    petsc: dict[str, str] = {}
+    tokens = list(argv)
+    i = 0
+    while i < len(tokens):
+        tok = tokens[i]
+        name = tok[1:]
+        if tok.startswith("-") and not tok.startswith("--") and "_" in name and name[0].isalpha():
+            nxt = tokens[i + 1] if i + 1 < len(tokens) else None
+            if nxt is not None and not (nxt.startswith("-") and not _is_number(nxt)):
+                petsc[name] = nxt
+                i += 1
+            else:
+                petsc[name] = ""
+        else:
+            ours.append(tok)
+        i += 1
+    return ours, petsc
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``hfcdem`` command; return the process exit code."""
+    """Run the ``hfcdem`` command; return the process exit code.
+
+    PETSc options anywhere on the line (e.g. ``-hfcdem_solid_ksp_type cg``)
+    go to PETSc's options database and override the solvers' defaults.
+    """
     parser = build_parser()
-    args = parser.parse_args(argv)
+    ours, petsc = split_petsc_options(sys.argv[1:] if argv is None else argv)
+    if petsc:
+        from petsc4py import PETSc
+
+        db = PETSc.Options()
+        for name, value in petsc.items():
+            db.setValue(name, value)
+    args = parser.parse_args(ours)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
@@ -340,4 +388,5 @@ def main(argv: Sequence[str] | None = None) -> int:
 __all__ = [
     "build_parser",
     "main",
+    "split_petsc_options",
 ]

@@ -2,7 +2,7 @@
 
 import pytest
 
-from hfcdem.cli import main
+from hfcdem.cli import main, split_petsc_options
 
 
 def test_info_prints_the_stack(capsys):
@@ -25,3 +25,41 @@ def test_unknown_command_exits_with_usage():
     with pytest.raises(SystemExit) as err:
         main(["frobnicate"])
     assert err.value.code == 2
+
+
+def test_petsc_options_are_split_from_the_command_line():
+    ours, petsc = split_petsc_options(
+        [
+            "run",
+            "s.toml",
+            "-o",
+            "out",
+            "-hfcdem_solid_pc_factor_mat_solver_type",
+            "mumps",
+            "--set",
+            "a=1",
+            "-log_view",
+            "-mat_mumps_icntl_14",
+            "-5",
+            "--force",
+        ]
+    )
+    assert ours == ["run", "s.toml", "-o", "out", "--set", "a=1", "--force"]
+    assert petsc == {
+        "hfcdem_solid_pc_factor_mat_solver_type": "mumps",
+        "log_view": "",
+        "mat_mumps_icntl_14": "-5",
+    }
+
+
+def test_petsc_options_on_the_command_line_reach_the_options_database():
+    from petsc4py import PETSc
+
+    db = PETSc.Options()
+    try:
+        assert main(["info", "-hfcdem_cli_test_value", "7", "-hfcdem_cli_test_flag"]) == 0
+        assert db.getInt("hfcdem_cli_test_value") == 7
+        assert db.hasName("hfcdem_cli_test_flag")
+    finally:
+        db.delValue("hfcdem_cli_test_value")
+        db.delValue("hfcdem_cli_test_flag")
