@@ -131,6 +131,8 @@ def test_leak_off_is_balanced_and_shortens_the_fracture():
     assert max(r.volume_mismatch for r in leaky.history) < 1e-9  # 5.4e-11 measured
     assert last.fracture_fluid + last.leaked_volume == pytest.approx(last.injected_volume, rel=1e-6)
     assert leaky.wet_extent((0, 0), (1, 0)) <= plain.wet_extent((0, 0), (1, 0))
+    # no facet leaks more than it holds: the fluid of every facet stays >= 0
+    assert leaky.content.min() >= 0.0, leaky.content.min()
 
 
 # ----------------------------------------------------------- borehole breakdown

@@ -479,7 +479,10 @@ class HydraulicFracture:
         if lo is None or self.net.size == 0:
             return np.zeros(self.net.size)
         vol = lo.volume(self.net.area, self.wet_since, self.t, t1)
-        return np.where(self.wet, vol, 0.0)
+        # a facet loses at most the fluid it holds at the start of the step: leaking more
+        # (a facet just broken, or closed with no residual aperture, holds none) drives
+        # its pressure to a suction that pulls its faces shut and the rock ahead apart
+        return np.where(self.wet, np.minimum(vol, np.maximum(self.content, 0.0)), 0.0)
 
     def _accept(
         self,
