@@ -31,6 +31,7 @@ from mpi4py import MPI
 
 import hfcdem
 from hfcdem import analytic
+from hfcdem.cli import parse_with_petsc_options
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -39,7 +40,7 @@ def main(argv: list[str] | None = None) -> dict:
     """Walk through the API on the Sneddon plate; return what was measured."""
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("-o", "--output", default="results/api_tour")
-    args = parser.parse_args(argv)
+    args = parse_with_petsc_options(parser, argv)  # PETSc options too
     say = print if MPI.COMM_WORLD.rank == 0 else (lambda *a, **k: None)
 
     # %% [markdown]

@@ -35,6 +35,7 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.cli import parse_with_petsc_options
 from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
 from hfcdem.config.parts import MeshSizing, Plate, Wellbore
 from hfcdem.config.plates import BoreholeSquare
@@ -93,7 +94,7 @@ def main(argv: list[str] | None = None) -> dict:
         "--max-iterations", type=int, default=200, help="re-solves per cascade of breaks"
     )
     parser.add_argument("--no-pictures", action="store_true")
-    args = parser.parse_args(argv)
+    args = parse_with_petsc_options(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
     t_start = time.perf_counter()
 

@@ -29,6 +29,7 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
+from hfcdem.cli import parse_with_petsc_options
 from hfcdem.config.materials import ElasticMaterial, InSituStress
 from hfcdem.config.parts import MeshSizing, Plate, Wellbore
 from hfcdem.config.plates import BoreholeSquare
@@ -52,7 +53,7 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--pressure", type=float, default=20.0, help="wellbore pressure [MPa]")
     parser.add_argument("--tensile-strength", type=float, default=3.0, help="T [MPa]")
     parser.add_argument("--no-pictures", action="store_true")
-    args = parser.parse_args(argv)
+    args = parse_with_petsc_options(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
     t_start = time.perf_counter()
 

@@ -28,6 +28,7 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
+from hfcdem.cli import parse_with_petsc_options
 from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
 from hfcdem.config.parts import Crack, MeshSizing, Plate
 from hfcdem.config.plates import KGDStrip
@@ -51,7 +52,7 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--dt", type=float, default=0.5, help="time step, s")
     parser.add_argument("--t-end", type=float, default=10.0, help="injection time, s")
     parser.add_argument("--stress", type=float, default=0.0, help="background stress, MPa")
-    args = parser.parse_args(argv)
+    args = parse_with_petsc_options(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
     out = prepare_output_dir(args.output, comm)
     say = print if comm.rank == 0 else (lambda *a, **k: None)

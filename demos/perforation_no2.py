@@ -27,6 +27,7 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from hfcdem.cli import parse_with_petsc_options
 from hfcdem.config.scene import load_scene
 from hfcdem.references import CHARGES
 from hfcdem.workflows.run import OutputInUse, run_scene
@@ -42,7 +43,7 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--resolution", default="coarse", help="'coarse', 'default' or 'paper'")
     parser.add_argument("--duration", default=None, help="injection time, e.g. '120 s'")
     parser.add_argument("--force", action="store_true", help="overwrite another scene's results")
-    args = parser.parse_args(argv)
+    args = parse_with_petsc_options(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
     say = print if comm.rank == 0 else (lambda *a, **k: None)
 

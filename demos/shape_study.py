@@ -25,6 +25,7 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from hfcdem.cli import parse_with_petsc_options
 from hfcdem.references import SHAPE_ORDERINGS, SHAPES
 from hfcdem.workflows.study import breakdown_text, load_study, pick_metric, run_study
 
@@ -39,7 +40,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
     parser.add_argument("--groups", type=int, default=1, help="cases run at once")
     parser.add_argument("--duration", default=None, help="injection time, e.g. '120 s'")
     parser.add_argument("--models", default=None, help="comma-separated subset, e.g. no2,1-1")
-    args = parser.parse_args(argv)
+    args = parse_with_petsc_options(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
     say = print if comm.rank == 0 else (lambda *a, **k: None)
 

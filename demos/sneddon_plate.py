@@ -30,6 +30,7 @@ from pathlib import Path
 
 from mpi4py import MPI
 
+from hfcdem.cli import parse_with_petsc_options
 from hfcdem.config.scene import load_scene
 from hfcdem.workflows.run import OutputInUse, run_scene
 
@@ -44,7 +45,7 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--size", type=float, default=0.005, help="element size at the crack, m")
     parser.add_argument("--alpha", type=float, default=100.0, help="spring factor alpha")
     parser.add_argument("--force", action="store_true", help="overwrite another scene's results")
-    args = parser.parse_args(argv)
+    args = parse_with_petsc_options(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
     say = print if comm.rank == 0 else (lambda *a, **k: None)
 

@@ -364,13 +364,15 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Run the ``hfcdem`` command; return the process exit code.
+def parse_with_petsc_options(
+    parser: argparse.ArgumentParser, argv: Sequence[str] | None = None
+) -> argparse.Namespace:
+    """Parse ``argv`` (default: the command line) with ``parser``, PETSc options apart.
 
-    PETSc options anywhere on the line (e.g. ``-hfcdem_solid_ksp_type cg``)
-    go to PETSc's options database and override the solvers' defaults.
+    PETSc options anywhere on the line (e.g. ``-hfcdem_cdem_ksp_type cg``, see
+    :func:`split_petsc_options`) go to PETSc's options database, where they
+    override the solvers' defaults.  The demos parse their lines with it too.
     """
-    parser = build_parser()
     ours, petsc = split_petsc_options(sys.argv[1:] if argv is None else argv)
     if petsc:
         from petsc4py import PETSc
@@ -378,7 +380,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         db = PETSc.Options()
         for name, value in petsc.items():
             db.setValue(name, value)
-    args = parser.parse_args(ours)
+    return parser.parse_args(ours)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``hfcdem`` command; return the process exit code.
+
+    PETSc options may appear anywhere on the line (:func:`parse_with_petsc_options`).
+    """
+    parser = build_parser()
+    args = parse_with_petsc_options(parser, argv)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
@@ -388,5 +399,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 __all__ = [
     "build_parser",
     "main",
+    "parse_with_petsc_options",
     "split_petsc_options",
 ]

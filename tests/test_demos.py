@@ -135,9 +135,15 @@ def test_shape_study_demo_sweeps_profiles_and_checks_orderings(shared_tmp_path, 
 
 def test_sneddon_demo_matches_eq_21_on_a_wide_plate(shared_tmp_path, capsys):
     out = shared_tmp_path / "sneddon"
-    summary = load("sneddon_plate").main(
-        ["-o", str(out), "--half-width", "5", "--alpha", "1000", "--size", "0.01"]
-    )
+    from petsc4py import PETSc
+
+    # a PETSc option on a demo's line reaches PETSc (the direct solve stays the default)
+    argv = ["-o", str(out), "--half-width", "5", "--alpha", "1000", "--size", "0.01"]
+    try:
+        summary = load("sneddon_plate").main([*argv, "-hfcdem_demo_test_option", "3"])
+        assert PETSc.Options().getInt("hfcdem_demo_test_option") == 3
+    finally:
+        PETSc.Options().delValue("hfcdem_demo_test_option")
     assert abs(summary["sneddon"]["centre_relative_error"]) < 0.02
     assert summary["sneddon"]["max_relative_error_inner"] < 0.05
     assert len(summary["sneddon"]["points"]) == 11
