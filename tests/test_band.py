@@ -17,10 +17,10 @@ def allsum(value):
     return comm.allreduce(int(value), op=MPI.SUM)
 
 
-def block_solid(dim=2, band=(0.3, 2)):
+def block_solid(dim=2, band=(0.3, 2), tmesh=None):
     """A reduced solid with springs on every facet; rollers on the left (x) and bottom (y)."""
     return CDEMSolid(
-        unit_block(dim),
+        unit_block(dim) if tmesh is None else tmesh,
         ElasticMaterial(30e9, 0.25),
         InSituStress(8 * MPa, 5 * MPa, 6 * MPa),
         InterfaceModel(alpha=100, tensile_strength=1e3 * MPa, cohesion=1e3 * MPa),
@@ -62,7 +62,9 @@ def _touching(solid, ids):
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_a_freed_facet_brings_its_vertex_rings_on_any_number_of_ranks(dim):
-    solid = block_solid(dim)
+    # one mesh for every solid below: a new mesh may be partitioned differently
+    tmesh = unit_block(dim)
+    solid = block_solid(dim, tmesh=tmesh)
     # the interface nearest a point inside the block, found on whichever rank owns it
     d = np.linalg.norm(solid.midpoints - [0.52, 0.47, 0.41 if dim == 3 else 0.0], axis=1)
     d = np.where(solid.owned, d, np.inf)
@@ -78,7 +80,7 @@ def test_a_freed_facet_brings_its_vertex_rings_on_any_number_of_ranks(dim):
     where = np.concatenate(comm.allgather(solid.midpoints[seed]))
     ring0 = np.isclose(solid.midpoints, where[0], rtol=0, atol=1e-12).all(axis=1)
     for rings, expected in ((0, ring0), (1, ring1), (2, ring2)):
-        fresh = block_solid(dim)
+        fresh = block_solid(dim, tmesh=tmesh)
         freed = fresh.free_interfaces(seed, rings=rings)
         assert freed == allsum(np.count_nonzero(expected & solid.owned))
         assert fresh.band.count() == freed
