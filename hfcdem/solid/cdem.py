@@ -78,6 +78,7 @@ class InterfaceSnapshot:
     normal_traction: np.ndarray  # tension positive (Pa)
     shear_traction: np.ndarray  # magnitude (Pa)
     shear_vector: np.ndarray  # on the + face
+    gap: np.ndarray  # w past the pre-compression offset, unclipped (m; negative: overlap)
 
 
 @dataclass
@@ -485,6 +486,7 @@ class CDEMSolid:
             normal_traction=tn,
             shear_traction=np.linalg.norm(tau_vec, axis=1),
             shear_vector=tau_vec,
+            gap=w - offset,
         )
 
     def _crack_pressure(self, loads: Loads) -> np.ndarray:
@@ -497,18 +499,13 @@ class CDEMSolid:
         old = self.contact.copy()
         # both directions compare the normal spring traction t0n + kn w with the fluid
         # pressure (faces_overlap)
-        t0n = np.einsum(
-            "fi,ij,fj->f", self.normals, loads.in_situ_factor * self.sigma0, self.normals
-        )
-        w_raw = -np.einsum("fi,fi->f", self.jumps(self.u), self.normals)
         pressure = self._crack_pressure(loads)
-        offset = np.where(t0n < 0.0, -t0n / self.kn, 0.0)
         self.states.switch_contacts(
             broken,
             snap.normal_traction,
             snap.shear_vector,
             pressure,
-            faces_overlap(w_raw - offset, pressure, self.kn),
+            faces_overlap(snap.gap, pressure, self.kn),
             self.model.friction,
         )
         changed = int(np.count_nonzero((old != self.contact) & self.owned))
