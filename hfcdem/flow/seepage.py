@@ -14,6 +14,12 @@ cavity connections on its diagonal).  The network is replicated on every rank
 in a rank-independent order and solved there with a sparse LU (PETSc,
 ``COMM_SELF``), so every rank holds the same pressures whatever their number.
 The solid does not enter yet: apertures are given, not computed.
+
+``filling="saturation"`` lets joints start dry and fill from the cavity
+(perforation paper, eqs. 14-19): one unknown ``q`` per facet with content
+``V (1 + q / Kw)``, pressure ``max(q, 0)`` and saturation ``min(1, 1 + q / Kw)``,
+fluxes scaled by ``ks = S^2 (3 - 2S)``; each step is a semismooth Newton solve
+(:mod:`hfcdem.flow.filling`).  With every joint full it is the compressible model.
 """
 
 from __future__ import annotations
@@ -25,6 +31,8 @@ import numpy as np
 from petsc4py import PETSc
 
 from hfcdem.config.materials import Fluid
+from hfcdem.flow.balance import relative_permeability
+from hfcdem.flow.filling import Linearisation, Pairs, linearise, residual, saturation
 from hfcdem.flow.network import Network, build_network
 from hfcdem.solid.cdem import CDEMSolid
 
@@ -33,6 +41,22 @@ INITIAL_JOINT_APERTURE = 5e-6
 
 #: PETSc options prefix of the seepage solve (the command line may override it)
 PREFIX = "hfcdem_seepage_"
+
+#: pivots below this are zero in the LU (PETSc's default, 2.2e-14, is absolute)
+ZERO_PIVOT = 1e-300
+
+#: filling modes: full joints with compressibility storage, or dry joints filling
+FILLING_MODES = ("compressible", "saturation")
+
+#: Newton stops when every facet's residual over the step is below this fraction
+#: of its void volume: ``|R_i| dt <= tol V_i`` (a pressure error ``tol Kw``, 2.2e-3 Pa for water)
+FILLING_TOLERANCE = 1e-12
+
+#: Newton iterations (linear solves) allowed per step before a RuntimeError
+MAX_NEWTON_ITERATIONS = 60
+
+#: the derivative of ks enters once the residual is below this fraction of the void
+NEWTON_SWITCH = 1e-2
 
 
 def joint_network(
@@ -80,6 +104,12 @@ class JointSeepage:
         Viscosity (Pa s) and bulk modulus ``Kw`` (Pa) of the fluid.
     pressure
         Initial facet pressure (Pa), ``(n,)`` or one value.
+    filling
+        ``"compressible"`` (full joints, storage ``V / Kw``) or ``"saturation"``
+        (joints fill from dry; pressure rises once full).
+    saturation
+        Initial saturation in [0, 1], ``(n,)`` or one value (1: full).  Below 1
+        only with ``filling="saturation"``, and only where the pressure is 0.
 
     """
 
@@ -89,7 +119,11 @@ class JointSeepage:
         aperture: float | np.ndarray,
         fluid: Fluid,
         pressure: float | np.ndarray = 0.0,
+        filling: str = "compressible",
+        saturation: float | np.ndarray = 1.0,
     ) -> None:
+        if filling not in FILLING_MODES:
+            raise ValueError(f"filling must be one of {FILLING_MODES}, got {filling!r}")
         n = net.size
         ap = np.asarray(aperture, dtype=float)
         if ap.ndim not in (0, 1) or (ap.ndim == 1 and ap.shape != (n,)):
@@ -105,17 +139,43 @@ class JointSeepage:
         self.aperture.flags.writeable = False
         self.storage.flags.writeable = False
         self.transmissibility.flags.writeable = False
-        self._pressure = self._facet_values("pressure", pressure)
+        self.filling = filling
+        # q: the pressure of a full joint, Kw (S - 1) below it (see hfcdem.flow.filling)
+        initial = self._facet_values("pressure", pressure)
+        self._q = _initial_state(initial, saturation, filling, fluid)
         fa, fb, inner = net.pair_facets
         self._cavity = np.flatnonzero(~inner)  # connections to the cavity
-        self._csr, self._diag = _csr(n, fa, fb, inner, self.transmissibility)
+        self._pattern = _pattern(n, fa, fb, inner)
+        self._csr, self._diag = _csr(self._pattern, fa, inner, self.transmissibility)
+        t = self.transmissibility
+        self._pairs = Pairs(fa[inner], fb[inner], t[inner], fa[~inner], t[~inner], n)
         self._solver: tuple[float, PETSc.KSP] | None = None
         self._injected = 0.0
+        self._iterations = 0
 
     @property
     def pressure(self) -> np.ndarray:
         """Facet pressures (Pa) after the last step."""
-        return self._pressure.copy()
+        if self.filling == "compressible":
+            return self._q.copy()
+        return np.maximum(self._q, 0.0)
+
+    @property
+    def saturation(self) -> np.ndarray:
+        """Facet saturations in [0, 1] (1 everywhere in the compressible mode)."""
+        if self.filling == "compressible":
+            return np.ones(self.net.size)
+        return saturation(self._q, self.fluid.bulk_modulus)
+
+    @property
+    def content(self) -> np.ndarray:
+        """Fluid content of every facet, ``V (1 + q / Kw)`` (m^3 at zero pressure)."""
+        return self.aperture * self.net.area + self.storage * self._q
+
+    @property
+    def newton_iterations(self) -> int:
+        """Linear solves of the last step (1 in the compressible mode)."""
+        return self._iterations
 
     @property
     def cavity_facets(self) -> np.ndarray:
@@ -123,14 +183,29 @@ class JointSeepage:
         return np.asarray(self.net.pair_facets[0][self._cavity])
 
     def stored(self) -> float:
-        """Fluid stored by compression above zero pressure: ``sum V p / Kw`` (m^3)."""
-        return float(self.storage @ self._pressure)
+        """Content above full joints at zero pressure: ``sum V q / Kw`` (m^3).
 
-    def inflow(self, cavity_pressure: float | np.ndarray, pressure: np.ndarray) -> np.ndarray:
-        """Rate into the network through every cavity connection (m^3/s) at facet ``pressure``."""
+        ``sum V p / Kw`` when every joint is full; negative while some are not.
+        """
+        return float(self.storage @ self._q)
+
+    def inflow(
+        self,
+        cavity_pressure: float | np.ndarray,
+        pressure: np.ndarray,
+        saturation: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Rate into the network through every cavity connection (m^3/s) at facet ``pressure``.
+
+        ``saturation`` (per facet; default full) scales each connection by
+        ``ks`` of the mean of the facet's and the cavity's (1) saturation.
+        """
         pc = self._cavity_values(cavity_pressure)
         fa = self.cavity_facets
-        return self.transmissibility[self._cavity] * (pc - pressure[fa])
+        t = self.transmissibility[self._cavity]
+        if saturation is not None:
+            t = t * relative_permeability(0.5 * (np.asarray(saturation)[fa] + 1.0))
+        return t * (pc - pressure[fa])
 
     def flux_into_network(self) -> float:
         """Volume that entered from the cavity during the last step (m^3)."""
@@ -149,14 +224,66 @@ class JointSeepage:
         if self.net.size == 0:
             self._injected = 0.0
             return np.zeros(0)
-        rhs = self.storage / dt * self._pressure + self._cavity_load(pc)
+        if self.filling == "saturation":
+            if pc.size and pc.min() < 0.0:
+                msg = f"cavity_pressure must be >= 0 Pa with saturation filling, got {pc.min()!r}"
+                raise ValueError(msg)
+            self._q, self._injected, self._iterations = self._fill(dt, pc)
+            return self.pressure
+        rhs = self.storage / dt * self._q + self._cavity_load(pc)
         if self._solver is None or self._solver[0] != dt:
             self.destroy()
             self._solver = (dt, _lu(self._csr, self._diag, self.storage / dt))
         new = _solve(self._solver[1], rhs)
         self._injected = dt * float(self.inflow(pc, new).sum())
-        self._pressure = new
+        self._q = new
+        self._iterations = 1
         return new.copy()
+
+    def _fill(self, dt: float, pc: np.ndarray) -> tuple[np.ndarray, float, int]:
+        """Semismooth Newton for one filling step: new ``q``, injected volume, linear solves.
+
+        Each iterate solves the system linearised at the last one: the active set
+        of ``max(q, 0)``, and ``ks`` lagged (Picard) until the active set stays
+        and the residual is below :data:`NEWTON_SWITCH` and falling, then with its
+        derivative (Newton; early on it can point the wrong way where ``ks``
+        grows fast with S).  The accepted iterate is a plain linear solve and
+        the injected volume is that system's cavity flux, so its rows sum to
+        exact mass conservation whatever the residual.  Iterates are projected
+        on bounds the solution obeys: a joint that fills within an iteration,
+        with no outflow yet, overshoots by orders of magnitude.
+        """
+        old = self._q
+        kw = self.fluid.bulk_modulus
+        rate = self.storage / dt
+        scale = dt / (self.aperture * self.net.area)  # residual as a fraction of the void
+        # a joint below full at the end only gained (p = 0: nothing flows out), and no
+        # pressure exceeds the largest old or cavity one (a monotone scheme)
+        low, high = np.minimum(old, 0.0), max(float(old.max()), float(pc.max(initial=0.0)))
+        q, newton, worst = old, False, math.inf
+        for solves in range(1, MAX_NEWTON_ITERATIONS + 1):
+            lin = linearise(self._pairs, q, kw, pc, newton)
+            new = self._linear_solve(lin, rate, rate * old + lin.load)
+            res = float(np.abs(residual(self._pairs, new, old, rate, kw, pc) * scale).max())
+            if res <= FILLING_TOLERANCE:
+                return new, -dt * float(lin.cavity_outflow(new).sum()), solves
+            same = np.array_equal(new > 0.0, q > 0.0)
+            newton = same and res < NEWTON_SWITCH and res < worst
+            q, worst = np.clip(new, low, high), res
+        raise RuntimeError(
+            f"saturation filling: Newton did not converge in {MAX_NEWTON_ITERATIONS} iterations "
+            f"(dt = {dt!r} s; residual {worst:.3g} of the void); try a smaller dt"
+        )
+
+    def _linear_solve(self, lin: Linearisation, shift: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        indptr, indices, inverse, count = self._pattern
+        data = np.bincount(inverse, weights=lin.values, minlength=count)
+        ksp = _lu((indptr, indices, data), self._diag, shift)
+        try:
+            return _solve(ksp, rhs)
+        finally:
+            ksp.getOperators()[0].destroy()
+            ksp.destroy()
 
     def steady(self, cavity_pressure: float | np.ndarray) -> np.ndarray:
         """Steady facet pressures for ``cavity_pressure`` (the state is not changed).
@@ -207,24 +334,60 @@ class JointSeepage:
         return np.broadcast_to(arr, (n,)).copy()
 
 
-def _csr(
-    n: int, fa: np.ndarray, fb: np.ndarray, inner: np.ndarray, trans: np.ndarray
-) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray], np.ndarray]:
-    """Transmissibility matrix in CSR (duplicates summed), and its diagonal positions.
+def _initial_state(
+    pressure: np.ndarray, value: float | np.ndarray, filling: str, fluid: Fluid
+) -> np.ndarray:
+    """Validate the initial pressure and saturation and return the unknown ``q``."""
+    n = pressure.size
+    sat = np.asarray(value, dtype=float)
+    if sat.ndim not in (0, 1) or (sat.ndim == 1 and sat.shape != (n,)):
+        raise ValueError(f"saturation must be one value or {n} values (in [0, 1])")
+    sat = np.broadcast_to(sat, (n,))
+    if not np.all(np.isfinite(sat)) or (n and (sat.min() < 0.0 or sat.max() > 1.0)):
+        raise ValueError(f"saturation must be in [0, 1] on every facet, got {value!r}")
+    if filling == "compressible":
+        if n and sat.min() < 1.0:
+            raise ValueError("saturation below 1 needs filling='saturation' (compressible: full)")
+        return pressure
+    if n and pressure.min() < 0.0:
+        raise ValueError("pressure must be >= 0 Pa with saturation filling")
+    if np.any((sat < 1.0) & (pressure != 0.0)):
+        raise ValueError("pressure must be 0 Pa where the saturation is below 1")
+    return np.where(sat < 1.0, fluid.bulk_modulus * (sat - 1.0), pressure)
 
-    Inner pairs couple their two facets; a cavity pair adds to its facet's
-    diagonal only (its pressure is known).  Every diagonal is stored.
+
+def _pattern(
+    n: int, fa: np.ndarray, fb: np.ndarray, inner: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """CSR pattern of the pair matrix: indptr, indices, the slot of each entry, nonzeros.
+
+    Entries come in the order inner (a, a), (b, b), (a, b), (b, a), cavity
+    (c, c), then every diagonal; an inner pair couples its two facets, a cavity
+    pair adds to its facet's diagonal only (its pressure is known).
     """
-    a, b, t = fa[inner], fb[inner], trans[inner]
+    a, b = fa[inner], fb[inner]
     diag = np.arange(n, dtype=np.int64)
     rows = np.concatenate([a, b, a, b, fa[~inner], diag])
     cols = np.concatenate([a, b, b, a, fa[~inner], diag])
-    vals = np.concatenate([t, t, -t, -t, trans[~inner], np.zeros(n)])
     key = rows * n + cols
     uniq, inverse = np.unique(key, return_inverse=True)
-    data = np.bincount(inverse, weights=vals, minlength=len(uniq))
     indptr = np.concatenate([[0], np.cumsum(np.bincount(uniq // n, minlength=n))])
-    return (indptr, uniq % n, data), np.searchsorted(uniq, diag * n + diag)
+    return indptr, uniq % n, inverse, len(uniq)
+
+
+def _csr(
+    pattern: tuple[np.ndarray, np.ndarray, np.ndarray, int],
+    fa: np.ndarray,
+    inner: np.ndarray,
+    trans: np.ndarray,
+) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray], np.ndarray]:
+    """Transmissibility matrix in CSR (duplicates summed), and its diagonal positions."""
+    indptr, indices, inverse, count = pattern
+    n = len(indptr) - 1
+    t = trans[inner]
+    vals = np.concatenate([t, t, -t, -t, trans[~inner], np.zeros(n)])
+    data = np.bincount(inverse, weights=vals, minlength=count)
+    return (indptr, indices, data), inverse[len(inverse) - n :]  # the diagonals come last
 
 
 def _lu(
@@ -245,6 +408,9 @@ def _lu(
     ksp.setOperators(mat)
     ksp.setType("preonly")
     ksp.getPC().setType("lu")
+    # PETSc's zero pivot test is absolute (2.2e-14), but a dry joint's row is only its
+    # storage V / (Kw dt), e.g. 1e-19 m^3/(Pa s): treat only tiny pivots as zero
+    ksp.getPC().setFactorPivot(zeropivot=ZERO_PIVOT)
     ksp.setFromOptions()  # e.g. -hfcdem_seepage_pc_factor_mat_solver_type mumps
     ksp.setUp()
     return ksp
@@ -263,7 +429,11 @@ def _solve(ksp: PETSc.KSP, rhs: np.ndarray) -> np.ndarray:
 
 
 __all__ = [
+    "FILLING_MODES",
+    "FILLING_TOLERANCE",
     "INITIAL_JOINT_APERTURE",
+    "MAX_NEWTON_ITERATIONS",
+    "NEWTON_SWITCH",
     "PREFIX",
     "JointSeepage",
     "joint_network",
