@@ -22,6 +22,7 @@ from tiny_solid import tag_sides
 
 from hfcdem.config.materials import ElasticMaterial, Fluid, InSituStress, InterfaceModel
 from hfcdem.coupling.condense import cavity_vertices
+from hfcdem.flow import seepage
 from hfcdem.flow.seepage import INITIAL_JOINT_APERTURE, JointSeepage, joint_network
 from hfcdem.mesh.tagged import TaggedMesh, mesh_from_gmsh
 from hfcdem.solid.cdem import CDEMSolid
@@ -324,3 +325,184 @@ def test_box_3d_conserves_decays_and_is_rank_independent():
         assert worst < 5e-14  # injected = stored gain every step, measured 8.6e-15
         pressures.append(tr.pressure)
     assert np.array_equal(pressures[0], pressures[1])
+
+
+# --- saturation filling: joints fill from dry ----------------------------------------
+
+FRONT = (0.25, 0.5, 0.75)  # front positions / L at which the fill is compared
+
+
+def _dry(solid: CDEMSolid, aperture=INITIAL_JOINT_APERTURE, saturation=0.0) -> JointSeepage:
+    net = joint_network(solid, cavity_vertices(solid, ["left"], None))
+    return JointSeepage(net, aperture, FLUID, filling="saturation", saturation=saturation)
+
+
+def _half_saturation(x: np.ndarray, s: np.ndarray, v: np.ndarray) -> float:
+    """Where the void-weighted mean saturation of the facets at each x falls through 0.5."""
+    xs = np.unique(np.round(x, 12))
+    profile = np.array([np.average(s[np.isclose(x, u)], weights=v[np.isclose(x, u)]) for u in xs])
+    k = int(np.flatnonzero(profile < 0.5)[0])
+    return float(
+        xs[k - 1] + (profile[k - 1] - 0.5) / (profile[k - 1] - profile[k]) * (xs[k] - xs[k - 1])
+    )
+
+
+def _filling_front(nx: int, steps: int) -> dict[str, np.ndarray]:
+    """Fill a dry plate from x = 0 at p0 until the closed-form front reaches FRONT[-1] L.
+
+    Closed form (incompressible, sharp front, pressure linear behind it):
+    ``s_v dx_f/dt = k_eq p0 / x_f``, so ``x_f = sqrt(2 k_eq p0 t / s_v)`` with
+    ``k_eq`` the lattice's measured steady conductivity and ``s_v`` its void per
+    unit plate area.  Returns the errors / L of the front from the filled volume
+    (``sum V S / (s_v H)``) and of the S = 0.5 position, the front, the times,
+    the Newton solves per step and the worst per-step mass balance.
+    """
+    solid = _plate(nx)
+    k_eq = _equivalent(solid)[0]
+    sp = _dry(solid)
+    void = INITIAL_JOINT_APERTURE * sp.net.area
+    s_v = float(void.sum()) / (L * H)
+    dt = (FRONT[-1] * L) ** 2 * s_v / (2.0 * k_eq * P0) / steps
+    out: dict[str, list[float]] = {k: [] for k in ("volume", "half", "front", "time")}
+    solves, balance = [], 0.0
+    for k in range(1, steps + 1):
+        before = sp.stored()
+        sp.step(dt, P0)
+        gained = sp.stored() - before
+        balance = max(balance, abs(sp.flux_into_network() - gained) / gained)
+        solves.append(sp.newton_iterations)
+        if any(k == round((f / FRONT[-1]) ** 2 * steps) for f in FRONT):
+            exact = math.sqrt(2.0 * k_eq * P0 * k * dt / s_v)
+            front = L * float(void @ sp.saturation) / float(void.sum())
+            half = _half_saturation(sp.net.centroid[:, 0], sp.saturation, void)
+            out["volume"].append((front - exact) / L)
+            out["half"].append((half - exact) / L)
+            out["front"].append(front)
+            out["time"].append(k * dt)
+    result = {k: np.array(v) for k, v in out.items()}
+    result["solves"] = np.array(solves)
+    result["balance"] = np.array(balance)
+    return result
+
+
+def test_filling_front_converges_with_mesh():
+    """The front against the closed form, 200 steps (measured, errors / L at x_f = 0.25, 0.5, 0.75).
+
+    filled volume: nx = 8: -2.375e-2, -2.259e-2, -1.991e-2; 16: -1.076e-2,
+    -1.048e-2, -9.43e-3; 32: -4.43e-3, -4.50e-3, -4.14e-3 (O(h): 2.1-2.4 per halving;
+    the network lags).  S = 0.5: 32: -3.23e-3, -4.91e-3, -5.73e-3.
+    """
+    runs = {nx: _filling_front(nx, 200) for nx in (8, 16, 32)}
+    assert runs[32]["volume"] == pytest.approx([-4.433e-3, -4.499e-3, -4.141e-3], rel=0.01)
+    assert runs[32]["half"] == pytest.approx([-3.229e-3, -4.906e-3, -5.729e-3], rel=0.01)
+    e8, e16, e32 = (np.abs(runs[nx]["volume"]) for nx in (8, 16, 32))
+    assert np.all(e8 / e16 > 2.05) and np.all(e16 / e32 > 2.2)  # measured 2.11-2.21, 2.28-2.43
+    assert np.all(np.abs(runs[16]["half"]) < 1.3e-2)  # measured 7.8e-3 - 1.2e-2
+    # the front grows as sqrt(t): slope of log x_f against log t
+    slope = np.polyfit(np.log(runs[32]["time"]), np.log(runs[32]["front"]), 1)[0]
+    assert abs(slope - 0.5) < 7e-3  # measured 0.5057: the lag of O(h) weighs more early
+    for run in runs.values():
+        assert run["balance"] < 1e-12  # injected = content gained, measured <= 2.2e-13
+        assert run["solves"].max() <= 9  # measured mean 3.3-4.7, max 7-9
+
+
+def test_filling_front_converges_with_time_step():
+    """nx = 16: the front error at x_f = 0.75 L for 50, 100, 200, 400 steps.
+
+    Measured -6.583e-3, -8.299e-3, -9.428e-3, -1.024e-2 (and -1.075e-2, -1.107e-2
+    for 800, 1600): the gaps shrink by 1.4-1.6 per halving, order about 0.6,
+    not 1: the closed-form front starts with infinite speed (x_f ~ sqrt(t)).
+    """
+    errors = [_filling_front(16, steps)["volume"][-1] for steps in (50, 100, 200, 400)]
+    assert errors == pytest.approx([-6.583e-3, -8.299e-3, -9.428e-3, -1.024e-2], rel=0.01)
+    gaps = np.abs(np.diff(errors))
+    assert np.all(gaps[:-1] / gaps[1:] > 1.35)  # measured 1.52, 1.39
+
+
+def test_filling_conserves_mass_every_step():
+    """Random apertures and initial saturations, a pressure ramp, changes of dt."""
+    solid = _plate(16)
+    net = joint_network(solid, cavity_vertices(solid, ["left"], None))
+    rng = np.random.default_rng(15)
+    aperture = INITIAL_JOINT_APERTURE * rng.lognormal(0.0, 0.5, net.size)
+    saturation = np.where(rng.random(net.size) < 0.3, 1.0, rng.random(net.size))
+    sp = JointSeepage(net, aperture, FLUID, filling="saturation", saturation=saturation)
+    assert sp.saturation == pytest.approx(saturation, abs=1e-15)  # through q = Kw (S - 1)
+    start, worst, total, solves = sp.content.sum(), 0.0, 0.0, []
+    for k in range(60):
+        before = sp.stored()
+        sp.step((1.0, 3.0, 0.5)[k // 20], P0 * min(1.0, (k + 1) / 20))
+        gained = sp.stored() - before
+        total += sp.flux_into_network()
+        worst = max(worst, abs(sp.flux_into_network() - gained) / gained)
+        solves.append(sp.newton_iterations)
+    assert max(solves) <= 15  # measured 3-14, mean 4.9
+    assert worst < 3e-13  # measured 7.1e-14
+    assert abs(sp.content.sum() - start - total) / total < 3e-14  # measured 3.0e-15
+    s = sp.saturation
+    assert 0.0 < s.min() and s.max() == 1.0 and np.all(s >= saturation - 1e-15)
+    assert np.all(sp.pressure[s < 1.0] == 0.0) and sp.pressure.max() <= P0
+
+
+def test_full_joints_fill_like_compressible_seepage():
+    """Pressurised full joints: the same linear system, bit for bit; from p = 0, to round-off."""
+    solid = _plate(16)
+    net = joint_network(solid, cavity_vertices(solid, ["left"], None))
+    aperture = INITIAL_JOINT_APERTURE * np.random.default_rng(4).lognormal(0.0, 0.5, net.size)
+    modes = ("compressible", "saturation")
+    for start in (0.5 * P0, 0.0):
+        runs = [JointSeepage(net, aperture, FLUID, start, mode) for mode in modes]
+        gap, solves = 0.0, []
+        for k in range(20):
+            pc = P0 * (0.5 + min(0.5, (k + 1) / 10))
+            p = [sp.step(1e-4 if k < 10 else 3e-4, pc) for sp in runs]
+            gap = max(gap, float(np.abs(p[0] - p[1]).max()) / P0)
+            solves.append(runs[1].newton_iterations)
+            fluxes = [sp.flux_into_network() for sp in runs]
+            if start > 0.0:
+                assert gap == 0.0 and fluxes[0] == fluxes[1] and solves[-1] == 1
+        assert np.all(runs[1].saturation == 1.0)
+    # from p = 0 the active set of max(q, 0) grows over 9 solves in the first step, then
+    # one a step; the pressures agree within the Newton tolerance, 1e-12 Kw = 2.2e-3 Pa
+    assert solves == [9] + [1] * 19
+    assert gap < 1e-12 * FLUID.bulk_modulus / P0  # measured 8.4e-11 p0
+
+
+def test_filling_is_the_same_on_any_number_of_ranks():
+    comm = MPI.COMM_WORLD
+    states = []
+    for c in (comm, MPI.COMM_SELF):
+        sp = _dry(_plate(16, c))
+        for _ in range(20):
+            sp.step(2.0, P0)
+        states.append((sp.pressure, sp.saturation))
+    for a, b in zip(*states, strict=True):
+        assert comm.allreduce(float(np.abs(a - b).max()), op=MPI.MAX) == 0.0
+    assert 0.0 < states[0][1].mean() < 0.5  # part filled
+    gathered = comm.allgather(states[0][1])
+    assert all(np.array_equal(g, gathered[0]) for g in gathered)
+
+
+def test_filling_bad_input_is_refused(monkeypatch):
+    solid = _plate(8)
+    net = joint_network(solid, cavity_vertices(solid, ["left"], None))
+    a = INITIAL_JOINT_APERTURE
+    with pytest.raises(ValueError, match=r"filling must be one of"):
+        JointSeepage(net, a, FLUID, filling="dry")
+    for bad in (1.5, -0.1, math.nan):
+        with pytest.raises(ValueError, match=r"saturation must be in \[0, 1\]"):
+            JointSeepage(net, a, FLUID, filling="saturation", saturation=bad)
+    with pytest.raises(ValueError, match=r"saturation must be one value or"):
+        JointSeepage(net, a, FLUID, filling="saturation", saturation=np.zeros(net.size + 1))
+    with pytest.raises(ValueError, match=r"saturation below 1 needs filling='saturation'"):
+        JointSeepage(net, a, FLUID, saturation=0.5)
+    with pytest.raises(ValueError, match=r"pressure must be 0 Pa where the saturation"):
+        JointSeepage(net, a, FLUID, pressure=1.0, filling="saturation", saturation=0.5)
+    with pytest.raises(ValueError, match=r"pressure must be >= 0 Pa"):
+        JointSeepage(net, a, FLUID, pressure=-1.0, filling="saturation")
+    sp = JointSeepage(net, a, FLUID, filling="saturation", saturation=0.0)
+    with pytest.raises(ValueError, match=r"cavity_pressure must be >= 0 Pa"):
+        sp.step(1.0, -1.0)
+    monkeypatch.setattr(seepage, "MAX_NEWTON_ITERATIONS", 1)
+    with pytest.raises(RuntimeError, match=r"Newton did not converge in 1 iterations"):
+        sp.step(1.0, P0)
