@@ -159,6 +159,11 @@ def test_combine_is_linear_in_every_part():
     assert got.crack_pressure == 5e6 and got.in_situ_factor == 1.0
     per_facet = combine(base, Loads(crack_pressure=np.array([1.0, 2.0])), 1e6)
     assert np.allclose(per_facet.crack_pressure, [3e6, 4e6])
+    assert got.joint_pressure is None
+    joints = combine(base, Loads(joint_pressure=np.array([1.0, 0.0])), 2e6)
+    assert np.array_equal(joints.joint_pressure, [2e6, 0.0])
+    both = combine(joints, Loads(joint_pressure=np.array([0.5, 1.0])), 2.0)
+    assert np.array_equal(both.joint_pressure, [2e6 + 1.0, 2.0])
 
 
 def test_rigid_body_modes_are_orthonormal_and_cost_no_energy():

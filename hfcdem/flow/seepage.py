@@ -53,6 +53,9 @@ FILLING_MODES = ("compressible", "saturation")
 FILLING_TOLERANCE = 1e-12
 
 #: Newton iterations (linear solves) allowed per step before a RuntimeError
+#: relative round-off allowed in a facet's sum of fluxes (1000 machine epsilons)
+_ROUNDOFF = 1e3 * float(np.finfo(float).eps)
+
 MAX_NEWTON_ITERATIONS = 60
 
 #: the derivative of ks enters once the residual is below this fraction of the void
@@ -256,7 +259,16 @@ class JointSeepage:
         old = self._q
         kw = self.fluid.bulk_modulus
         rate = self.storage / dt
-        scale = dt / (self.aperture * self.net.area)  # residual as a fraction of the void
+        # tolerance: a fraction of the void, or the round-off of the facet's flux sum when
+        # that is larger (a long step on full joints: fluxes far above the void)
+        pairs = self._pairs
+        reach = np.zeros(self.net.size)
+        np.add.at(reach, pairs.a, pairs.t)
+        np.add.at(reach, pairs.b, pairs.t)
+        np.add.at(reach, pairs.c, pairs.tc)
+        pmax = max(float(np.abs(old).max()), float(pc.max(initial=0.0)))
+        void = self.aperture * self.net.area
+        scale = dt / np.maximum(void, _ROUNDOFF * dt * reach * pmax / FILLING_TOLERANCE)
         # a joint below full at the end only gained (p = 0: nothing flows out), and no
         # pressure exceeds the largest old or cavity one (a monotone scheme)
         low, high = np.minimum(old, 0.0), max(float(old.max()), float(pc.max(initial=0.0)))
@@ -272,7 +284,7 @@ class JointSeepage:
             q, worst = np.clip(new, low, high), res
         raise RuntimeError(
             f"saturation filling: Newton did not converge in {MAX_NEWTON_ITERATIONS} iterations "
-            f"(dt = {dt!r} s; residual {worst:.3g} of the void); try a smaller dt"
+            f"(dt = {dt!r} s; residual {worst:.3g} of the void or flux round-off); try a smaller dt"
         )
 
     def _linear_solve(self, lin: Linearisation, shift: np.ndarray, rhs: np.ndarray) -> np.ndarray:

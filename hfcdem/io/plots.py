@@ -160,8 +160,9 @@ def plot_lines(
     ylabel: str,
     title: str,
     comm: MPI.Comm = MPI.COMM_WORLD,
+    xscale: str = "linear",
 ) -> None:
-    """Plot ``(x, y, label, style)`` curves to PNG from rank 0."""
+    """Plot ``(x, y, label, style)`` curves to PNG from rank 0 (``xscale`` e.g. ``"log"``)."""
     if comm.rank == 0:
         import matplotlib
 
@@ -171,6 +172,7 @@ def plot_lines(
         fig, ax = plt.subplots(figsize=(7, 4.5))
         for x, y, label, style in curves:
             ax.plot(x, y, style, label=label)
+        ax.set_xscale(xscale)
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
         ax.set_title(title)

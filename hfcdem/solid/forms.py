@@ -52,15 +52,21 @@ class Loads:
 
 
 def combine(base: Loads, unit: Loads, lam: float) -> Loads:
-    """Return ``base + lam * unit`` (cavity pressures, crack pressure, in-situ factor)."""
+    """Return ``base + lam * unit`` (cavity, crack and joint pressures, in-situ factor)."""
     cavity = dict(base.cavity)
     for name, p in unit.cavity.items():
         cavity[name] = cavity.get(name, 0.0) + lam * p
+    joint: np.ndarray | None = None
+    for item, factor in ((base.joint_pressure, 1.0), (unit.joint_pressure, lam)):
+        if item is not None:
+            term = factor * np.asarray(item, dtype=float)
+            joint = term if joint is None else joint + term
     return Loads(
         cavity=cavity,
         crack_pressure=np.asarray(base.crack_pressure) + lam * np.asarray(unit.crack_pressure)
         if not (np.isscalar(base.crack_pressure) and np.isscalar(unit.crack_pressure))
         else float(base.crack_pressure) + lam * float(unit.crack_pressure),  # type: ignore[arg-type]
+        joint_pressure=joint,
         in_situ_factor=base.in_situ_factor + lam * unit.in_situ_factor,
     )
 

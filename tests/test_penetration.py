@@ -1,0 +1,148 @@
+"""Breakdown of a borehole under a pressure ramp with seepage into the joints.
+
+Seed 001's borehole (a = 30 mm, SH 20 MPa, Sh 12 MPa, T0 5 MPa) at a coarse wall
+size a/5.  The two limits are checked against the same solid ramped without
+seepage (the linear ramp of :mod:`hfcdem.solid.equilibrium`): fast, the joints
+are still dry when the wall breaks (the dry first break, Hubbert-Willis on this
+mesh); slow, every joint stands at the cavity pressure.  In between the
+breakdown pressure falls as the rate falls.  A viscous fluid (1 Pa s) puts the
+transition at MPa/s rates.
+"""
+
+import itertools
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from hfcdem.config.materials import ElasticMaterial, Fluid, InSituStress, InterfaceModel
+from hfcdem.config.parts import MeshSizing, Plate, Wellbore
+from hfcdem.config.plates import BoreholeSquare
+from hfcdem.coupling.penetration import PressureRamp, ramp_breakdown
+from hfcdem.mesh.build import mesh_geometry
+from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solid.forms import Loads
+from hfcdem.solid.interfaces import FacetState
+from hfcdem.solid.states import CascadeStopped
+
+A, SH, SHMIN, T0 = 0.03, 20e6, 12e6, 5e6
+WALL = ("wellbore_wall",)
+FLUID = Fluid(viscosity=1.0)
+APERTURE = 5e-6
+
+
+@pytest.fixture(scope="module")
+def plate():
+    sizing = MeshSizing(
+        A / 5, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
+    )
+    return mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing))
+
+
+def _solid(tmesh) -> CDEMSolid:
+    return CDEMSolid(
+        tmesh,
+        ElasticMaterial(20e9, 0.25),
+        InSituStress(sh_max=SH, sh_min=SHMIN, sv=SH),
+        InterfaceModel(
+            alpha=100, tensile_strength=T0, cohesion=60e6, friction_angle=30, break_rule="all"
+        ),
+        zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
+        fixed=tmesh.facet_groups("outer"),
+    )
+
+
+def _static_first_break(tmesh, joints_wet: bool) -> float:
+    """First break of the linear ramp: the cavity (and, wet, every joint) at the load factor."""
+    solid = _solid(tmesh)
+    joint = ((solid.state == FacetState.INTACT) & ~solid.is_crack).astype(float)
+    unit = Loads(
+        cavity={WALL[0]: 1.0}, joint_pressure=joint if joints_wet else None, in_situ_factor=0.0
+    )
+    try:
+        first = solid.ramp(Loads(cavity={WALL[0]: 0.0}), unit, 40e6)
+    except CascadeStopped as stop:  # wet joints: the first break runs through the zone
+        first = stop.first_break
+    assert first is not None
+    return float(first)
+
+
+def _ramp(tmesh, rate: float, steps: int = 150, filling: str = "saturation"):
+    return ramp_breakdown(
+        _solid(tmesh),
+        WALL,
+        FLUID,
+        APERTURE,
+        PressureRamp(rate, 25e6, steps=steps, filling=filling),
+    )
+
+
+def test_fast_ramp_breaks_dry(plate):
+    dry = _static_first_break(plate, joints_wet=False)
+    # Hubbert-Willis 3 Sh - SH + T0 = 21 MPa; a/5 is 31 % low (benchmarks/README.md)
+    assert dry == pytest.approx(14.435e6, rel=1e-4)
+    fast = _ramp(plate, 1e12)
+    assert fast.wet_fraction == 0.0
+    assert fast.pressure == pytest.approx(dry, rel=1e-9)
+    assert fast.mode == FacetState.TENSILE
+    # on the SH axis, at the wall
+    assert abs(fast.location[1]) < 1e-9 and abs(abs(fast.location[0]) - A) < A / 5
+
+
+def test_slow_ramp_breaks_with_joints_at_cavity_pressure(plate):
+    wet = _static_first_break(plate, joints_wet=True)
+    slow = _ramp(plate, 10.0)  # Pa/s: the joints lag the cavity by ~2e-7 of its pressure
+    assert slow.wet_fraction == 1.0
+    assert slow.wall_joint_pressure == pytest.approx(1.0, abs=1e-6)
+    assert slow.pressure == pytest.approx(wet, rel=1e-6)
+    # compressible joints, already full at the start: the same limit
+    full = _ramp(plate, 10.0, filling="compressible")
+    assert full.pressure == pytest.approx(wet, rel=1e-6)
+
+
+def test_breakdown_falls_with_rate(plate):
+    dry = _static_first_break(plate, joints_wet=False)
+    wet = _static_first_break(plate, joints_wet=True)
+    pb = [_ramp(plate, rate).pressure for rate in (1e9, 1e7, 1e6, 1e5)]
+    assert all(b is not None for b in pb)
+    assert all(wet * (1 - 1e-6) <= b <= dry * (1 + 1e-9) for b in pb)
+    assert all(a > b for a, b in itertools.pairwise(pb))
+    assert pb[0] - pb[-1] > 0.5 * (dry - wet)  # the sweep spans most of the transition
+
+
+@pytest.mark.mpi
+def test_ranks_agree(plate):
+    world = _ramp(plate, 1e6, steps=60)
+    sizing = MeshSizing(
+        A / 5, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
+    )
+    alone = mesh_geometry(
+        BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing), comm=MPI.COMM_SELF
+    )
+    one = _ramp(alone, 1e6, steps=60)
+    assert world.pressure == pytest.approx(one.pressure, rel=1e-10)
+    assert world.wet_fraction == one.wet_fraction
+
+
+def test_bad_input(plate):
+    with pytest.raises(ValueError, match="mode='full'"):
+        solid = CDEMSolid(
+            plate,
+            ElasticMaterial(20e9, 0.25),
+            InSituStress(sh_max=SH, sh_min=SHMIN, sv=SH),
+            InterfaceModel(alpha=100, tensile_strength=T0),
+            zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
+            fixed=plate.facet_groups("outer"),
+            mode="reduced",
+        )
+        ramp_breakdown(solid, WALL, FLUID, APERTURE, PressureRamp(1.0, 1e6))
+    with pytest.raises(ValueError, match="rate"):
+        PressureRamp(-1.0, 1e6)
+    with pytest.raises(ValueError, match="max_pressure"):
+        PressureRamp(1.0, 1e6, initial_pressure=2e6)
+    with pytest.raises(ValueError, match="steps"):
+        PressureRamp(1.0, 1e6, steps=0)
+    with pytest.raises(ValueError, match="filling"):
+        PressureRamp(1.0, 1e6, filling="instant")
+    with pytest.raises(KeyError, match="no_such_group"):
+        ramp_breakdown(_solid(plate), ("no_such_group",), FLUID, APERTURE, PressureRamp(1.0, 1e6))
