@@ -104,6 +104,26 @@ def test_perforation_no2_demo_runs_the_scene_and_names_its_files(shared_tmp_path
         assert "fracture.png" in printed
 
 
+def test_joint_seepage_demo_fills_the_joints_around_no2_from_dry(shared_tmp_path, capsys):
+    out = shared_tmp_path / "seepage"
+    result = load("joint_seepage").main(["-o", str(out), "--times", "0.05,1"])
+    # the paper's permeability coefficient 8.33e-11 m^2/(Pa s) as a^2 / (12 mu), water
+    assert result["aperture_m"] == pytest.approx(1.0e-6, rel=1e-3)
+    rows = result["rows"]
+    filled = np.array([r["fluid_over_void"] for r in rows])
+    full = np.array([r["full_share_of_joints"] for r in rows])
+    # full joints hold V (1 + p / Kw): the scene's Kw is the paper's 10 MPa, p 60 MPa
+    assert filled[0] > 0.0 and np.all(np.diff(filled) > 0.0) and filled[-1] < 1.0 + 60 / 10
+    assert np.all(np.diff(full) >= 0.0) and full[-1] > full[0] + 0.2
+    assert rows[-1]["time_s"] == pytest.approx(1.0)
+    frames = (out / "joints.pvd").read_text()
+    assert frames.count("<DataSet") == 2
+    for name in ("seepage.csv", "saturation.png", "joints/frame_0001.vtu"):
+        assert (out / name).stat().st_size > 0, name
+    if MPI.COMM_WORLD.rank == 0:
+        assert "saturation.png" in capsys.readouterr().out
+
+
 def test_field_cluster_demo_starts_from_the_completion_pressure(shared_tmp_path, capsys):
     out = shared_tmp_path / "field"
     summary = load("field_cluster").main(["-o", str(out), "--duration", "1 s"])

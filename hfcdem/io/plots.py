@@ -311,10 +311,78 @@ def render_fracture_pattern(
     comm.barrier()
 
 
+def render_facet_series(
+    path: str | os.PathLike[str],
+    points: np.ndarray,
+    series: Sequence[np.ndarray],
+    titles: Sequence[str],
+    walls: np.ndarray,
+    label: str,
+    threshold: float = 0.0,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+    view_axis: int | None = None,
+) -> None:
+    """Draw facet values at several times side by side (collective).
+
+    ``points`` (F, 3, 3): this rank's facet triangles; ``series``: one (F,) array
+    per panel; facets at or below ``threshold`` are left out; ``walls`` (W, 3, 3)
+    this rank's cavity wall triangles, drawn grey.  One colour scale for all panels;
+    the view is isometric, or along axis ``view_axis``.
+    """
+    parts = comm.gather((points, [np.asarray(v) for v in series], walls), root=0)
+    if comm.rank != 0:
+        comm.barrier()
+        return
+    assert parts is not None
+    ensure_display()
+    import pyvista
+
+    pyvista.OFF_SCREEN = True
+
+    def surface(tris: np.ndarray) -> Any:
+        pts = tris.reshape(-1, 3)
+        faces = np.column_stack([np.full(len(tris), 3), np.arange(len(pts)).reshape(-1, 3)])
+        return pyvista.PolyData(pts, faces.ravel())
+
+    tris = np.concatenate([p for p, _, _ in parts])
+    wall = np.concatenate([w for _, _, w in parts])
+    values = [np.concatenate([v[k] for _, v, _ in parts]) for k in range(len(series))]
+    top = max((float(v.max()) for v in values if v.size), default=1.0) or 1.0
+    plotter = pyvista.Plotter(
+        off_screen=True, shape=(1, len(values)), window_size=(480 * len(values), 520)
+    )
+    for col, (vals, title) in enumerate(zip(values, titles, strict=True)):
+        plotter.subplot(0, col)
+        if len(wall):
+            plotter.add_mesh(surface(wall), color="lightgrey", opacity=0.5)
+        shown = vals > threshold
+        if shown.any():
+            surf = surface(tris[shown])
+            surf.cell_data[label] = vals[shown]
+            plotter.add_mesh(
+                surf,
+                scalars=label,
+                clim=(0.0, top),
+                cmap="viridis",
+                opacity=0.6,
+                show_scalar_bar=col == len(values) - 1,
+            )
+        if view_axis is None:
+            plotter.view_isometric()
+        else:
+            (plotter.view_yz, plotter.view_xz, plotter.view_xy)[view_axis]()
+        plotter.add_text(title, font_size=11)
+    plotter.link_views()
+    plotter.screenshot(str(path))
+    plotter.close()
+    comm.barrier()
+
+
 __all__ = [
     "ensure_display",
     "plot_interface_states",
     "plot_lines",
+    "render_facet_series",
     "render_field",
     "render_fracture_pattern",
 ]
