@@ -135,6 +135,19 @@ def _run(args: argparse.Namespace) -> int:
         )
         return 0
     bd = summary["breakdown_pressure_MPa"]
+    if summary.get("kind") == "seepage_ramp":
+        first = summary["first_crack"]
+        say(
+            f"{scene.name}: first break "
+            + (
+                f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s ({first['mode']})"
+                if bd
+                else "not reached"
+            )
+            + f", {summary['joints_holding_pressure']:.1%} of the joints holding pressure, "
+            f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
+        )
+        return 0
     say(
         f"{scene.name}: breakdown "
         + (f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s" if bd else "not reached")

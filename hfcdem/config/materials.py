@@ -22,6 +22,15 @@ def _check_positive(name: str, value: float, unit: str, upper: float = math.inf)
         raise ValueError(f"{name} must be in (0, {upper:g}) {unit}, got {value!r}")
 
 
+#: permeability coefficient of the joints (perforation paper, Tables 1 and 3), m^2/(Pa s)
+PERMEABILITY_COEFFICIENT = 8.33e-11
+
+#: hydraulic aperture whose cubic-law coefficient a^2 / (12 mu) is the paper's
+#: permeability coefficient with water (1 mPa s): sqrt(12e-3 * 8.33e-11) = 1.0e-6 m.
+#: The paper's 5 um initial opening is mechanical; the flow needs the hydraulic one.
+JOINT_HYDRAULIC_APERTURE = 1.0e-6
+
+
 @dataclass(frozen=True)
 class ElasticMaterial:
     """Isotropic linear elastic rock (Pa, -)."""
@@ -271,6 +280,8 @@ class Injection:
 
 __all__ = [
     "BREAK_RULES",
+    "JOINT_HYDRAULIC_APERTURE",
+    "PERMEABILITY_COEFFICIENT",
     "ElasticMaterial",
     "Fluid",
     "InSituStress",

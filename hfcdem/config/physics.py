@@ -13,6 +13,7 @@ them so a run's record can print what was assumed.  Any invalid field raises
     tensile_strength = "3 MPa"
     cohesion = "17 MPa"
     friction_angle = "30 deg"
+    joint_aperture = "1 um"     # hydraulic aperture of the intact joints (wall_joints = "seepage")
     weibull_modulus = 5         # optional scatter of the strengths
     spring_factor = 100         # alpha in kn = alpha E / h
 
@@ -35,7 +36,8 @@ them so a run's record can print what was assumed.  Any invalid field raises
     extra_volume = "0 m3"       # storage outside the model (not yet a unit: m3 as a number)
     wellbore = "cased"          # or "open": does the pressure load the wellbore wall too?
     wall_film = "5 um"          # fluid storage = film thickness x pressurised wall area
-    wall_joints = "wet"         # "dry", "wet" (the wall's) or "permeated" (open cracks' too)
+    wall_joints = "wet"         # "dry", "wet" (the wall's), "permeated" (open cracks' too) or
+                                # "seepage" (joints fill in time; a pressure_schedule ramp)
     rigid_cavity = false        # true: the stored volume ignores the wall motion
 
     [load]                      # instead of [injection]: one static solve
@@ -73,7 +75,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
+from hfcdem.config.materials import (
+    JOINT_HYDRAULIC_APERTURE,
+    ElasticMaterial,
+    Fluid,
+    Injection,
+    InSituStress,
+    InterfaceModel,
+)
 from hfcdem.config.tables import SceneError, TomlTable
 from hfcdem.config.units import parse_quantity
 
@@ -83,7 +92,7 @@ def field_default(cls: type, name: str) -> Any:
     return cls.__dataclass_fields__[name].default  # type: ignore[attr-defined]
 
 
-WALL_JOINTS = ("dry", "wet", "permeated")
+WALL_JOINTS = ("dry", "wet", "permeated", "seepage")
 PHYSICS_SECTIONS = ("rock", "stress", "fluid", "injection", "load", "solver", "output")
 
 # in-situ stresses below this are almost surely MPa values typed with "Pa"
@@ -149,6 +158,7 @@ class Physics:
     wellbore: str = "cased"
     wall_film: float | None = None
     wall_joints: str = "dry"
+    joint_aperture: float = JOINT_HYDRAULIC_APERTURE  # m, the intact joints' (seepage)
     rigid_cavity: bool = False
     output_interval: float | None = None  # None: duration / 20
     pictures: bool = True
@@ -188,8 +198,8 @@ def _check(ok: bool, path: str, reason: str) -> None:
         raise SceneError(path, reason)
 
 
-def _read_rock(r: _Reader) -> tuple[ElasticMaterial, dict[str, Any]]:
-    """[rock]: the elastic material and the interface model's fields."""
+def _read_rock(r: _Reader) -> tuple[ElasticMaterial, dict[str, Any], float]:
+    """[rock]: the elastic material, the interface model's fields, the joints' aperture."""
     rock = r.section("rock")
     e = rock.quantity("youngs_modulus", "stress")
     nu = rock.number("poisson_ratio")
@@ -210,6 +220,12 @@ def _read_rock(r: _Reader) -> tuple[ElasticMaterial, dict[str, Any]]:
     _check(0.0 <= phi < 90.0, "rock.friction_angle", f"expected 0 to 90 deg, got {phi:g} deg")
     weibull = rock.number("weibull_modulus", None) if rock.has("weibull_modulus") else None
     alpha = r.get(rock, "spring_factor", "number", (InterfaceModel, "alpha"))
+    aperture = r.get(rock, "joint_aperture", "length", (Physics, "joint_aperture"))
+    _check(
+        0.0 < aperture <= 1e-3,
+        "rock.joint_aperture",
+        f"expected a hydraulic aperture in (0, 1 mm], got {aperture!r} m",
+    )
     rock.finish()
 
     model = {
@@ -219,7 +235,7 @@ def _read_rock(r: _Reader) -> tuple[ElasticMaterial, dict[str, Any]]:
         "friction_angle": phi,
         "weibull_modulus": weibull,
     }
-    return ElasticMaterial(e, nu), model
+    return ElasticMaterial(e, nu), model, aperture
 
 
 def _read_stress(r: _Reader) -> InSituStress:
@@ -324,7 +340,7 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
             "wall_joints",
             "string",
             (Physics, "wall_joints"),
-            choices=("dry", "wet", "permeated"),
+            choices=WALL_JOINTS,
         )
         rigid = inj.raw("rigid_cavity") if inj.has("rigid_cavity") else False
         _check(
@@ -443,7 +459,7 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
     """Read the physics sections of a parsed scene document (see the module docstring)."""
     r = _Reader(data)
     try:  # the readers' own checks name the key; the dataclasses check ranges too
-        rock, model = _read_rock(r)
+        rock, model, aperture = _read_rock(r)
         stress = _read_stress(r)
         fluid = _read_fluid(r)
         pump = _read_pump(r)
@@ -455,6 +471,7 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             stress=stress,
             fluid=fluid,
             solver=solver,
+            joint_aperture=aperture,
             **pump,
             **output,
             defaulted=tuple(r.defaulted),

@@ -89,6 +89,8 @@ class RampBreakdown:
     ``wet_fraction``: share of the zone's joints holding pressure at the break;
     ``wall_joint_pressure``: mean joint pressure of the joints on the cavity
     wall over the cavity pressure, at the break;
+    ``joint_pressure``, ``saturation``: per local facet of the solid (0 off the
+    joints) at the break, or at the end of the ramp;
     ``initial_failures``: joints broken at the start, before the ramp (not
     the breakdown; they hold no fluid); ``history``: per step
     ``(time, cavity pressure, fluid in the joints (m^3), load fraction of the step
@@ -104,6 +106,8 @@ class RampBreakdown:
     steps: int
     initial_failures: int = 0
     history: list[tuple[float, float, float, float]] = field(default_factory=list)
+    joint_pressure: np.ndarray | None = None
+    saturation: np.ndarray | None = None
 
 
 def ramp_breakdown(
@@ -142,12 +146,14 @@ def ramp_breakdown(
         seep = JointSeepage(net, aperture, fluid, pressure=ramp.initial_pressure)
     wall = np.unique(seep.cavity_facets)
 
+    def per_facet(values: np.ndarray) -> np.ndarray:
+        out = np.zeros(solid.num_facets)
+        out[joints] = values[local]
+        return out
+
     def loads_at(pw: float, pj: np.ndarray, in_situ: float = 1.0) -> Loads:
-        joint = np.zeros(solid.num_facets)
-        joint[joints] = pj[local]
-        return Loads(
-            cavity={name: pw for name in cavity}, joint_pressure=joint, in_situ_factor=in_situ
-        )
+        cav = {name: pw for name in cavity}
+        return Loads(cavity=cav, joint_pressure=per_facet(pj), in_situ_factor=in_situ)
 
     dt = ramp.dt
     t, pw = 0.0, ramp.initial_pressure
@@ -184,12 +190,24 @@ def ramp_breakdown(
                     steps=n,
                     initial_failures=initial_failures,
                     history=history,
+                    joint_pressure=per_facet(pj_break),
+                    saturation=per_facet(seep.saturation),
                 )
             t, pw, pj = t + dt, pw_new, pj_new
     finally:
         seep.destroy()
     return RampBreakdown(
-        None, None, None, None, float(np.mean(pj > 0.0)), 0.0, ramp.steps, initial_failures, history
+        None,
+        None,
+        None,
+        None,
+        float(np.mean(pj > 0.0)) if net.size else 0.0,
+        0.0,
+        ramp.steps,
+        initial_failures,
+        history,
+        per_facet(pj),
+        per_facet(seep.saturation),
     )
 
 

@@ -30,7 +30,7 @@ from collections.abc import Sequence
 import numpy as np
 from petsc4py import PETSc
 
-from hfcdem.config.materials import Fluid
+from hfcdem.config.materials import JOINT_HYDRAULIC_APERTURE, PERMEABILITY_COEFFICIENT, Fluid
 from hfcdem.flow.balance import relative_permeability
 from hfcdem.flow.filling import Linearisation, Pairs, linearise, residual, saturation
 from hfcdem.flow.network import Network, build_network
@@ -38,6 +38,7 @@ from hfcdem.solid.cdem import CDEMSolid
 
 #: initial hydraulic aperture of the intact joints (perforation paper, Table 1), m
 INITIAL_JOINT_APERTURE = 5e-6
+
 
 #: PETSc options prefix of the seepage solve (the command line may override it)
 PREFIX = "hfcdem_seepage_"
@@ -444,8 +445,10 @@ __all__ = [
     "FILLING_MODES",
     "FILLING_TOLERANCE",
     "INITIAL_JOINT_APERTURE",
+    "JOINT_HYDRAULIC_APERTURE",
     "MAX_NEWTON_ITERATIONS",
     "NEWTON_SWITCH",
+    "PERMEABILITY_COEFFICIENT",
     "PREFIX",
     "JointSeepage",
     "joint_network",

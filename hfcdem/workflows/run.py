@@ -236,6 +236,11 @@ def run_scene(
         from hfcdem.workflows.static import run_static
 
         return run_static(scene, solid, out, say, record)
+    if phys.wall_joints == "seepage":
+        from hfcdem.workflows.seepage_ramp import run_seepage_ramp
+
+        cavity = pressurised_groups(tmesh.facet_names, phys.wellbore)
+        return run_seepage_ramp(scene, solid, cavity, out, say, record)
     return _run_coupled(scene, solid, out, say, record, resume, observers)
 
 

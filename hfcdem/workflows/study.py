@@ -324,6 +324,9 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
         "shear_failures",
         "wall_time_s",
     ]
+    ramps = bool(rows) and all(r.get("kind") == "seepage_ramp" for r in rows)
+    if ramps:  # the first break of a pressure ramp: how far the fluid got
+        cols += ["joints_holding_pressure", "wall_joint_pressure_ratio"]
 
     _write_table(out / "results.csv", rows, cols)
     import matplotlib
@@ -341,8 +344,16 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
     fc = [_num(r.get("first_crack_pressure_MPa")) for r in rows]
     a1.plot(xs, fc, "^:", label="first crack")
     a1.set_ylabel("pressure (MPa)")
-    a2.plot(xs, [_num(r.get("fracture_degree")) for r in rows], "o-")
-    a2.set_ylabel("fracture degree")
+    if ramps:
+        share = [_num(r.get("joints_holding_pressure")) * 100 for r in rows]
+        wall = [_num(r.get("wall_joint_pressure_ratio")) * 100 for r in rows]
+        a2.plot(xs, share, "o-", label="joints holding pressure")
+        a2.plot(xs, wall, "s--", label="wall joints' pressure / cavity's")
+        a2.set_ylabel("at the first break (%)")
+        a2.legend()
+    else:
+        a2.plot(xs, [_num(r.get("fracture_degree")) for r in rows], "o-")
+        a2.set_ylabel("fracture degree")
     _label_axes((a1, a2), study, rows, xs, categorical)
     a1.legend()
     fig.suptitle(study.name)
@@ -397,6 +408,8 @@ def _label_axes(axes: Any, study: Study, rows: list[dict[str, Any]], xs: list, c
         ax.set_xlabel(study.parameter + ("" if categorical else " (SI)"))
         if categorical:
             ax.set_xticks(xs, [str(r["value"]) for r in rows])
+        elif len(xs) > 1 and min(xs) > 0.0 and max(xs) >= 100.0 * min(xs):
+            ax.set_xscale("log")  # values over decades (rates, viscosities)
         ax.grid(alpha=0.3)
 
 

@@ -1,0 +1,151 @@
+"""A scene run with ``wall_joints = "seepage"``: the pressure ramp to the first break.
+
+The scene's ``pressure_schedule`` must be one linear ramp ``[[0 s, P0], [t1,
+P1]]``; the cavity pressure follows it to ``duration`` (at most ``t1``) in
+steps of ``solver.time_step`` while the joints of the fracturable zone fill
+from dry (saturation filling, hydraulic aperture ``rock.joint_aperture``) and
+load the solid (:func:`hfcdem.coupling.penetration.ramp_breakdown`).  The run
+ends at the first break: under a rising pressure that is the breakdown
+(initiation) pressure of the classical criteria, Hubbert-Willis when the joints
+are still dry and Haimson-Fairhurst when they stand at the cavity pressure.
+Rate-controlled injection with seepage is not coupled yet.
+
+Written: ``summary.json``, ``history.csv`` (cavity pressure and fluid in the
+joints per step), ``joints.vtu`` (saturation and pressure of every joint at the
+break, for ParaView) and ``pressure.png``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+from hfcdem.config.scene import Scene
+from hfcdem.config.tables import SceneError
+from hfcdem.coupling.penetration import PressureRamp, ramp_breakdown
+from hfcdem.io.files import write_csv, write_interfaces, write_json
+from hfcdem.io.plots import plot_lines
+from hfcdem.solid.cdem import CDEMSolid
+
+_MODES = {1: "tensile", 2: "shear"}
+
+
+def seepage_ramp(scene: Scene) -> PressureRamp:
+    """Return the :class:`PressureRamp` of a ``wall_joints = "seepage"`` scene (clear errors)."""
+    phys = scene.physics
+    inj = phys.injection
+    points: tuple[tuple[float, float], ...] = inj.points if inj is not None else ()
+    if inj is None or inj.rate_controlled or len(points) != 2 or points[0][0] != 0.0:
+        raise SceneError(
+            "injection",
+            "wall_joints = 'seepage' runs a pressure ramp: give pressure_schedule = "
+            "[['0 s', P0], [t1, P1]] (rate-controlled injection with seepage is not coupled yet)",
+        )
+    p0, (t1, p1) = points[0][1], points[1]
+    if not p1 > p0:
+        raise SceneError(
+            "injection.pressure_schedule", f"the ramp must rise, got {p0:g} -> {p1:g} Pa"
+        )
+    if phys.duration > t1 * (1 + 1e-12):
+        raise SceneError(
+            "injection.duration",
+            f"the seepage ramp ends at the schedule's last time {t1:g} s, got {phys.duration:g} s",
+        )
+    rate = (p1 - p0) / t1
+    steps = max(1, math.ceil(phys.duration / phys.solver.time_step - 1e-9))
+    return PressureRamp(rate, p0 + rate * phys.duration, steps, initial_pressure=p0)
+
+
+def run_seepage_ramp(
+    scene: Scene,
+    solid: CDEMSolid,
+    cavity: tuple[str, ...],
+    out: Path,
+    say: Callable[[str], None],
+    record: Callable[[], dict[str, Any]],
+) -> dict[str, Any]:
+    """Run the ramp of a seepage scene on ``solid`` and write its results into ``out``."""
+    phys, comm = scene.physics, solid.comm
+    ramp = seepage_ramp(scene)
+    if solid.mode != "full":
+        raise SceneError("solver.solid", "wall_joints = 'seepage' needs solid = 'full'")
+    say(
+        f"seepage ramp: {ramp.rate / 1e6:.4g} MPa/s from {ramp.initial_pressure / 1e6:.4g} MPa, "
+        f"{ramp.steps} steps; joints of hydraulic aperture {phys.joint_aperture * 1e6:.3g} um "
+        "fill from dry"
+    )
+    result = ramp_breakdown(solid, cavity, phys.fluid, phys.joint_aperture, ramp, progress=say)
+    if result.initial_failures:
+        say(f"initial state: {result.initial_failures} interfaces fail before the ramp")
+    rows = [list(row) for row in result.history]
+    write_csv(
+        out / "history.csv",
+        ["time_s", "cavity_pressure_Pa", "fluid_in_joints_m3", "break_fraction_of_step"],
+        [[r[0], r[1], r[2], r[3] if math.isfinite(r[3]) else -1.0] for r in rows],
+        comm,
+    )
+    own = solid.owned
+    assert result.joint_pressure is not None and result.saturation is not None
+    write_interfaces(
+        out / "joints.vtu",
+        solid.vertex_coords[own],
+        {
+            "saturation": result.saturation[own],
+            "pressure": result.joint_pressure[own],
+            "state": solid.state[own].astype(float),
+        },
+        comm,
+    )
+    pb = result.pressure
+    location = result.location
+    summary: dict[str, Any] = {
+        "scene": scene.name,
+        "kind": "seepage_ramp",
+        "breakdown_pressure_MPa": pb / 1e6 if pb is not None else None,
+        "breakdown_time_s": result.time,
+        "first_crack_pressure_MPa": pb / 1e6 if pb is not None else None,
+        "first_crack_time_s": result.time,
+        "first_crack": None
+        if location is None
+        else {
+            "point_m": [*map(float, location), *([0.0] * (3 - len(location)))],
+            "mode": _MODES.get(int(result.mode or 0), "intact"),
+        },
+        "peak_pressure_MPa": max(r[1] for r in result.history) / 1e6 if pb is None else pb / 1e6,
+        "initial_failures": result.initial_failures,
+        "joints_holding_pressure": result.wet_fraction,
+        "wall_joint_pressure_ratio": result.wall_joint_pressure,
+        "joint_aperture_m": phys.joint_aperture,
+        "pressure_rate_MPa_per_s": ramp.rate / 1e6,
+        "steps": result.steps,
+        "stopped": None,  # a ramp that breaks nothing is an answer, not a failure
+    } | record()
+    write_json(out / "summary.json", summary, comm)
+    if comm.rank == 0 and rows:
+        times = np.array([0.0] + [r[0] for r in rows])
+        pressures = np.array([ramp.initial_pressure] + [r[1] for r in rows]) / 1e6
+        curves = [(times, pressures, "cavity pressure", "-")]
+        if pb is not None:
+            label = f"first break {pb / 1e6:.2f} MPa"
+            curves.append((np.array([result.time]), np.array([pb / 1e6]), label, "rv"))
+        plot_lines(
+            out / "pressure.png", curves, "time (s)", "pressure (MPa)", scene.name, MPI.COMM_SELF
+        )
+    comm.barrier()
+    if pb is None:
+        say(f"no joint broke up to {ramp.max_pressure / 1e6:.4g} MPa")
+    else:
+        say(
+            f"first break {pb / 1e6:.4g} MPa at {result.time:.4g} s "
+            f"({summary['first_crack']['mode']}); {result.wet_fraction:.1%} of the joints "
+            f"hold pressure, wall joints at {result.wall_joint_pressure:.3f} of the cavity's"
+        )
+    return summary
+
+
+__all__ = ["run_seepage_ramp", "seepage_ramp"]

@@ -1,0 +1,80 @@
+"""Scenes with ``wall_joints = "seepage"``: the pressure ramp run end to end, and bad input.
+
+The borehole scene at its coarse resolution with a viscous fluid breaks before
+any joint holds pressure, exactly where the same solid ramped with dry joints
+breaks; with water the joints stand near the cavity pressure and the wall breaks
+lower.
+"""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from hfcdem.config.scene import load_scene
+from hfcdem.config.tables import SceneError
+from hfcdem.mesh.build import create_scene_mesh
+from hfcdem.solid.forms import Loads
+from hfcdem.workflows.run import build_solid, run_scene
+from hfcdem.workflows.seepage_ramp import seepage_ramp
+
+SCENE = Path(__file__).resolve().parents[1] / "meshes/scenes/borehole_seepage.toml"
+A = 0.03  # borehole radius
+
+
+def _scene(**overrides):
+    return load_scene(SCENE, "coarse", overrides=overrides or None)
+
+
+def test_ramp_of_the_scene():
+    ramp = seepage_ramp(_scene())
+    assert ramp.rate == pytest.approx(1e6)
+    assert ramp.initial_pressure == 0.0 and ramp.max_pressure == pytest.approx(25e6)
+    assert ramp.steps == 200 and ramp.filling == "saturation"
+    assert _scene().physics.joint_aperture == pytest.approx(5e-6)
+
+
+def test_viscous_fluid_breaks_the_wall_dry_and_water_below(shared_tmp_path):
+    scene = _scene(**{"fluid.viscosity": "100 Pa.s"})
+    solid = build_solid(scene, create_scene_mesh(scene).tmesh)
+    unit = Loads(cavity={"wellbore_wall": 1.0}, in_situ_factor=0.0)
+    dry = solid.ramp(Loads(cavity={"wellbore_wall": 0.0}), unit, 40e6)
+    assert dry == pytest.approx(14.42e6, rel=1e-3)  # borehole_plate's coarse first crack
+
+    out = shared_tmp_path / "viscous"
+    summary = run_scene(scene, out)
+    assert summary["kind"] == "seepage_ramp"
+    assert summary["joints_holding_pressure"] == 0.0
+    assert summary["breakdown_pressure_MPa"] * 1e6 == pytest.approx(dry, rel=1e-9)
+    assert summary["first_crack"]["mode"] == "tensile"
+    x, y, _ = summary["first_crack"]["point_m"]
+    assert abs(y) < 1e-9 and A < abs(x) < A + A / 5  # on the SH axis, one element deep
+    for name in ("summary.json", "history.csv", "joints.vtu", "pressure.png"):
+        assert (out / name).stat().st_size > 0, name
+    assert json.loads((out / "summary.json").read_text())["kind"] == "seepage_ramp"
+
+    water = run_scene(_scene(**{"fluid.viscosity": "1 mPa.s"}), shared_tmp_path / "water")
+    assert water["joints_holding_pressure"] > 0.5
+    assert water["wall_joint_pressure_ratio"] > 0.95
+    # Haimson-Fairhurst (eta = 0) on this mesh: 8.83 MPa (tests/test_penetration.py)
+    assert 8.83 < water["breakdown_pressure_MPa"] < 8.9
+
+
+def test_bad_seepage_scenes_name_the_field():
+    three = [["0 s", "0 MPa"], ["10 s", "10 MPa"], ["25 s", "25 MPa"]]
+    with pytest.raises(SceneError, match="pressure ramp"):
+        seepage_ramp(_scene(**{"injection.pressure_schedule": three}))
+    with pytest.raises(SceneError, match=r"injection\.duration"):
+        seepage_ramp(_scene(**{"injection.duration": "30 s"}))
+    with pytest.raises(SceneError, match=r"rock\.joint_aperture"):
+        _scene(**{"rock.joint_aperture": "2 mm"})
+    with pytest.raises(SceneError, match="must rise"):
+        seepage_ramp(
+            _scene(**{"injection.pressure_schedule": [["0 s", "5 MPa"], ["25 s", "1 MPa"]]})
+        )
+
+
+def test_reduced_solid_is_refused(shared_tmp_path):
+    scene = _scene(**{"solver.solid": "reduced"})
+    with pytest.raises(SceneError, match=r"solver\.solid"):
+        run_scene(scene, shared_tmp_path / "reduced")
