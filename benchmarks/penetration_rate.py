@@ -16,6 +16,7 @@ to fill one joint of length h from the wall, ``t_h = 6 mu h^2 / (a^2 P_dry)``
 (the front of a filling conduit, x^2 = a^2 P t / (6 mu)).
 
     make run CMD="python3 benchmarks/penetration_rate.py --divisions 5 10 20"
+    make run CMD="python3 benchmarks/penetration_rate.py --limits --divisions 5 10 20 40"
 """
 
 from __future__ import annotations
@@ -58,14 +59,44 @@ def _solid(tmesh) -> CDEMSolid:  # type: ignore[no-untyped-def]
 
 
 def _limit(tmesh, wet: bool) -> float:  # type: ignore[no-untyped-def]
+    """First break of the linear ramp: dry joints, or every joint at the cavity pressure."""
     solid = _solid(tmesh)
+    base = Loads(cavity={WALL[0]: 0.0})
+    solid.equilibrate(base)  # what breaks at excavation (a/40: one facet) is not the breakdown
     joint = ((solid.state == FacetState.INTACT) & ~solid.is_crack).astype(float)
     unit = Loads(cavity={WALL[0]: 1.0}, joint_pressure=joint if wet else None, in_situ_factor=0.0)
     try:
-        first = solid.ramp(Loads(cavity={WALL[0]: 0.0}), unit, 40e6)
+        first = solid.ramp(base, unit, 40e6)
     except CascadeStopped as stop:
         first = stop.first_break
     return float(first) if first is not None else float("nan")
+
+
+def _limits_table(divisions: list[int], say) -> None:  # type: ignore[no-untyped-def]
+    """Both limits against the wall size, with first-order Richardson extrapolation."""
+    say("| h | dry (MPa) | vs HW | Richardson | vs HW | wet (MPa) | vs HF | Richardson | vs HF |")
+    say("|---|---|---|---|---|---|---|---|---|")
+    last = None
+    for div in divisions:
+        sizing = MeshSizing(
+            A / div, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
+        )
+        tmesh = mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing))
+        dry, wet = _limit(tmesh, False), _limit(tmesh, True)
+        cells = ["", "", "", ""]
+        if last is not None:  # errors O(h): 2 P(h) - P(2h)
+            rd, rw = 2 * dry - last[0], 2 * wet - last[1]
+            cells = [
+                f"{rd / 1e6:.3f}",
+                f"{rd / HW - 1:+.1%}",
+                f"{rw / 1e6:.3f}",
+                f"{rw / HF - 1:+.1%}",
+            ]
+        say(
+            f"| a/{div} | {dry / 1e6:.4f} | {dry / HW - 1:+.1%} | {cells[0]} | {cells[1]} | "
+            f"{wet / 1e6:.4f} | {wet / HF - 1:+.1%} | {cells[2]} | {cells[3]} |"
+        )
+        last = (dry, wet)
 
 
 def main() -> None:
@@ -76,9 +107,15 @@ def main() -> None:
     parser.add_argument("--aperture", type=float, default=5e-6, help="m")
     parser.add_argument("--steps", type=int, default=200, help="time steps to 25 MPa")
     parser.add_argument("--plot", default="results/penetration_rate.png")
+    parser.add_argument(
+        "--limits", action="store_true", help="only the two limits against h, extrapolated"
+    )
     args = parser.parse_args()
     comm = MPI.COMM_WORLD
     say = print if comm.rank == 0 else (lambda *a, **k: None)
+    if args.limits:
+        _limits_table(args.divisions, say)
+        return
     fluid = Fluid(viscosity=args.viscosity)
     say(f"# {comm.size} rank(s), viscosity {args.viscosity} Pa s, aperture {args.aperture} m,")
     say(f"# {args.steps} steps to 25 MPa; HW {HW / 1e6:.2f} MPa, HF (eta 0) {HF / 1e6:.2f} MPa")
