@@ -147,7 +147,7 @@ def _run(args: argparse.Namespace) -> int:
             + f", {summary['joints_holding_pressure']:.1%} of the joints holding pressure, "
             f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
         )
-        return 0
+        return 0 if summary["stopped"] is None else 4
     say(
         f"{scene.name}: breakdown "
         + (f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s" if bd else "not reached")

@@ -61,20 +61,63 @@ def test_viscous_fluid_breaks_the_wall_dry_and_water_below(shared_tmp_path):
 
 
 def test_bad_seepage_scenes_name_the_field():
+    schedule = {f"injection.{k}": None for k in ("pressure_rate", "max_pressure", "pressure_step")}
     three = [["0 s", "0 MPa"], ["10 s", "10 MPa"], ["25 s", "25 MPa"]]
     with pytest.raises(SceneError, match="pressure ramp"):
-        seepage_ramp(_scene(**{"injection.pressure_schedule": three}))
+        seepage_ramp(
+            _scene(
+                **schedule, **{"injection.pressure_schedule": three, "injection.duration": "25 s"}
+            )
+        )
     with pytest.raises(SceneError, match=r"injection\.duration"):
-        seepage_ramp(_scene(**{"injection.duration": "30 s"}))
-    with pytest.raises(SceneError, match=r"rock\.joint_aperture"):
-        _scene(**{"rock.joint_aperture": "2 mm"})
+        seepage_ramp(
+            _scene(
+                **schedule,
+                **{
+                    "injection.pressure_schedule": [["0 s", "0 MPa"], ["25 s", "25 MPa"]],
+                    "injection.duration": "30 s",
+                },
+            )
+        )
     with pytest.raises(SceneError, match="must rise"):
         seepage_ramp(
-            _scene(**{"injection.pressure_schedule": [["0 s", "5 MPa"], ["25 s", "1 MPa"]]})
+            _scene(
+                **schedule,
+                **{
+                    "injection.pressure_schedule": [["0 s", "5 MPa"], ["25 s", "1 MPa"]],
+                    "injection.duration": "25 s",
+                },
+            )
         )
+    with pytest.raises(SceneError, match=r"rock\.joint_aperture"):
+        _scene(**{"rock.joint_aperture": "2 mm"})
+    with pytest.raises(SceneError, match="duration or max_pressure"):
+        _scene(**{"injection.duration": "10 s"})
+    with pytest.raises(SceneError, match=r"injection\.pressure_rate"):
+        _scene(**{"injection.pressure_rate": "-1 MPa/s"})
+    with pytest.raises(SceneError, match=r"injection\.max_pressure"):
+        _scene(**{"injection.max_pressure": "0 MPa"})
+
+
+def test_pressure_step_sets_the_steps_at_any_rate():
+    fast = seepage_ramp(_scene(**{"injection.pressure_rate": "100 MPa/s"}))
+    assert fast.steps == 200 and fast.max_pressure == pytest.approx(25e6)
+    assert fast.dt == pytest.approx(0.125e6 / 100e6)
+    timed = seepage_ramp(_scene(**{"injection.pressure_step": None, "solver.time_step": "0.5 s"}))
+    assert timed.steps == 50
 
 
 def test_reduced_solid_is_refused(shared_tmp_path):
     scene = _scene(**{"solver.solid": "reduced"})
     with pytest.raises(SceneError, match=r"solver\.solid"):
         run_scene(scene, shared_tmp_path / "reduced")
+
+
+def test_rock_that_fails_on_excavation_stops_the_run_cleanly(shared_tmp_path):
+    # Weibull m = 3 joint strengths: the excavated wall cascades at 0 MPa
+    out = shared_tmp_path / "weak"
+    summary = run_scene(_scene(**{"rock.weibull_modulus": 3}), out)
+    assert "excavated rock fails before the ramp" in summary["stopped"]
+    assert summary["breakdown_pressure_MPa"] is None and summary["initial_failures"] > 1000
+    stored = json.loads((out / "summary.json").read_text())
+    assert stored["stopped"] == summary["stopped"]

@@ -29,7 +29,10 @@ them so a run's record can print what was assumed.  Any invalid field raises
     density = "1000 kg/m3"
     residual_aperture = "1 um"
 
-    [injection]                 # exactly one of rate, rate_schedule, pressure_schedule
+    [injection]                 # exactly one of rate, rate_schedule, pressure_schedule,
+                                # pressure_rate ("1 MPa/s": a ramp from initial_pressure
+                                # to max_pressure, or over duration; pressure_step sets
+                                # the steps of a seepage ramp)
     rate = "1e-7 m3/s"
     duration = "60 s"
     initial_pressure = "0 MPa"
@@ -159,6 +162,7 @@ class Physics:
     wall_film: float | None = None
     wall_joints: str = "dry"
     joint_aperture: float = JOINT_HYDRAULIC_APERTURE  # m, the intact joints' (seepage)
+    pressure_step: float | None = None  # Pa per step of a seepage ramp (None: time_step)
     rigid_cavity: bool = False
     output_interval: float | None = None  # None: duration / 20
     pictures: bool = True
@@ -275,15 +279,21 @@ def _read_fluid(r: _Reader) -> Fluid:
     return Fluid(**fluid_kw)
 
 
-def _read_schedule(inj: TomlTable) -> Injection:
-    """Exactly one of ``rate``, ``rate_schedule`` (time, rate) or ``pressure_schedule``."""
-    given = [k for k in ("rate", "rate_schedule", "pressure_schedule") if inj.has(k)]
+def _read_schedule(inj: TomlTable) -> Injection | None:
+    """Read exactly one of rate, rate_schedule, pressure_schedule, pressure_rate.
+
+    ``pressure_rate`` returns None: the caller builds the ramp from the initial
+    pressure over the duration.
+    """
+    keys = ("rate", "rate_schedule", "pressure_schedule", "pressure_rate")
+    given = [k for k in keys if inj.has(k)]
     _check(
         len(given) == 1,
         "injection",
-        "give exactly one of rate, rate_schedule, pressure_schedule"
-        + (f" (got {', '.join(given)})" if given else ""),
+        "give exactly one of " + ", ".join(keys) + (f" (got {', '.join(given)})" if given else ""),
     )
+    if given[0] == "pressure_rate":
+        return None
     if given[0] == "rate":
         return Injection.constant_rate(inj.quantity("rate", "flow_rate"))
     points = inj.raw(given[0])
@@ -320,14 +330,18 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
         ld.finish()
         load: StaticLoad | None = StaticLoad(pressure)
         injection, duration, p0, extra, wellbore = None, 0.0, 0.0, 0.0, "cased"
-        film, joints, rigid = None, "dry", False
+        film, joints, rigid, pressure_step = None, "dry", False, None
     else:
         load = None
         inj = r.section("injection")
         injection = _read_schedule(inj)
-        duration = inj.quantity("duration", "time")
-        _check(duration > 0.0, "injection.duration", f"must be positive, got {duration:g} s")
         p0 = r.get(inj, "initial_pressure", "stress", (Physics, "initial_pressure"))
+        pressure_step = None
+        if injection is None:  # pressure_rate: a linear ramp from p0
+            injection, duration, pressure_step = _read_ramp(inj, p0)
+        else:
+            duration = inj.quantity("duration", "time")
+        _check(duration > 0.0, "injection.duration", f"must be positive, got {duration:g} s")
         extra = r.get(inj, "extra_volume", "number", (Physics, "extra_volume"))
         _check(extra >= 0.0, "injection.extra_volume", f"must be >= 0 m3, got {extra!r}")
         # perforated wells are cased: only the tunnels are open hole
@@ -361,9 +375,42 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
         "wellbore": wellbore,
         "wall_film": film,
         "wall_joints": joints,
+        "pressure_step": pressure_step,
         "rigid_cavity": rigid,
         "load": load,
     }
+
+
+def _read_ramp(inj: TomlTable, p0: float) -> tuple[Injection, float, float | None]:
+    """``pressure_rate`` with ``duration`` or ``max_pressure``, and ``pressure_step``."""
+    rate = inj.quantity("pressure_rate", "pressure_rate")
+    _check(
+        0.0 < rate <= 1e12,
+        "injection.pressure_rate",
+        f"expected a rising pressure, 0 to 1 TPa/s, got {rate:g} Pa/s",
+    )
+    _check(
+        inj.has("duration") != inj.has("max_pressure"),
+        "injection",
+        "a pressure_rate ramp takes duration or max_pressure (where it ends), one of them",
+    )
+    if inj.has("duration"):
+        duration = inj.quantity("duration", "time")
+    else:
+        top = inj.quantity("max_pressure", "stress")
+        _check(top > p0, "injection.max_pressure", f"must exceed initial_pressure {p0:g} Pa")
+        duration = (top - p0) / rate
+    step = inj.quantity("pressure_step", "stress") if inj.has("pressure_step") else None
+    _check(
+        step is None or step > 0.0,
+        "injection.pressure_step",
+        f"must be a positive pressure, got {step!r} Pa",
+    )
+    return (
+        Injection.pressure_schedule([(0.0, p0), (duration, p0 + rate * duration)]),
+        duration,
+        step,
+    )
 
 
 def _read_output(r: _Reader) -> dict[str, Any]:

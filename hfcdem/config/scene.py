@@ -470,7 +470,10 @@ def _parse_scene(
 
 
 def set_field(doc: dict[str, Any], dotted: str, value: Any) -> None:
-    """Set ``dotted`` in a scene document; a number indexes an array (``perforations.0``)."""
+    """Set ``dotted`` in a scene document; a number indexes an array (``perforations.0``).
+
+    ``None`` removes a table key (e.g. to swap ``duration`` for ``max_pressure``).
+    """
     keys = dotted.split(".")
     node: Any = doc
     for depth, key in enumerate(keys):
@@ -485,7 +488,9 @@ def set_field(doc: dict[str, Any], dotted: str, value: Any) -> None:
             continue
         if not isinstance(node, dict):
             raise SceneError(dotted, f"{keys[depth - 1]!r} is not a table in the scene")
-        if last:
+        if last and value is None:
+            node.pop(key, None)
+        elif last:
             node[key] = value
         else:
             node = node.setdefault(key, {})

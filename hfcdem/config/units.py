@@ -28,6 +28,14 @@ UNITS: dict[str, dict[str, float]] = {
     },
     "viscosity": {"Pa.s": 1.0, "mPa.s": 1e-3, "cP": 1e-3},
     "density": {"kg/m3": 1.0, "g/cm3": 1e3},
+    "pressure_rate": {
+        "Pa/s": 1.0,
+        "kPa/s": 1e3,
+        "MPa/s": 1e6,
+        "GPa/s": 1e9,
+        "MPa/min": 1e6 / 60.0,
+        "psi/min": 6894.757293168 / 60.0,
+    },
 }
 
 EXAMPLES = {
@@ -38,6 +46,7 @@ EXAMPLES = {
     "flow_rate": "1e-7 m3/s",
     "viscosity": "1 mPa.s",
     "density": "1000 kg/m3",
+    "pressure_rate": "1 MPa/s",
 }
 
 # other spellings people type; mapped before lookup

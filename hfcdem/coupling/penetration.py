@@ -35,6 +35,7 @@ from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.equilibrium import critical_factor
 from hfcdem.solid.forms import Loads, combine
 from hfcdem.solid.interfaces import FacetState
+from hfcdem.solid.states import CascadeStopped
 
 
 @dataclass(frozen=True)
@@ -91,6 +92,7 @@ class RampBreakdown:
     wall over the cavity pressure, at the break;
     ``joint_pressure``, ``saturation``: per local facet of the solid (0 off the
     joints) at the break, or at the end of the ramp;
+    ``stopped``: why no ramp ran (the excavated state cascades);
     ``initial_failures``: joints broken at the start, before the ramp (not
     the breakdown; they hold no fluid); ``history``: per step
     ``(time, cavity pressure, fluid in the joints (m^3), load fraction of the step
@@ -108,6 +110,7 @@ class RampBreakdown:
     history: list[tuple[float, float, float, float]] = field(default_factory=list)
     joint_pressure: np.ndarray | None = None
     saturation: np.ndarray | None = None
+    stopped: str | None = None
 
 
 def ramp_breakdown(
@@ -136,7 +139,20 @@ def ramp_breakdown(
         cavity={name: ramp.initial_pressure for name in cavity},
         joint_pressure=np.where(np.isin(np.arange(solid.num_facets), joints), p0, 0.0),
     )
-    initial_failures = solid.equilibrate(start)
+    try:
+        initial_failures = solid.equilibrate(start)
+    except CascadeStopped as stop:  # the excavated rock does not stand: no ramp to run
+        return RampBreakdown(
+            None,
+            None,
+            None,
+            None,
+            0.0,
+            0.0,
+            0,
+            stop.broken,
+            stopped=f"the excavated rock fails before the ramp: {stop}",
+        )
     joints = np.flatnonzero((solid.state == FacetState.INTACT) & ~solid.is_crack)
     net = joint_network(solid, cavity_vertices(solid, cavity, None), joints)
     local = _network_positions(solid, net.index(), joints)

@@ -1,13 +1,15 @@
 """A scene run with ``wall_joints = "seepage"``: the pressure ramp to the first break.
 
-The scene's ``pressure_schedule`` must be one linear ramp ``[[0 s, P0], [t1,
-P1]]``; the cavity pressure follows it to ``duration`` (at most ``t1``) in
-steps of ``solver.time_step`` while the joints of the fracturable zone fill
-from dry (saturation filling, hydraulic aperture ``rock.joint_aperture``) and
-load the solid (:func:`hfcdem.coupling.penetration.ramp_breakdown`).  The run
-ends at the first break: under a rising pressure that is the breakdown
-(initiation) pressure of the classical criteria, Hubbert-Willis when the joints
-are still dry and Haimson-Fairhurst when they stand at the cavity pressure.
+The scene's injection must be one linear ramp: ``pressure_rate`` (with
+``max_pressure`` or ``duration``), or a ``pressure_schedule`` ``[[0 s, P0],
+[t1, P1]]``.  The cavity pressure follows it to ``duration`` (at most ``t1``)
+in steps of ``injection.pressure_step`` (or ``solver.time_step``) while the
+joints of the fracturable zone fill from dry (saturation filling, hydraulic
+aperture ``rock.joint_aperture``) and load the solid
+(:func:`hfcdem.coupling.penetration.ramp_breakdown`).  The run ends at the
+first break: under a rising pressure that is the breakdown (initiation)
+pressure of the classical criteria, Hubbert-Willis when the joints are still
+dry and Haimson-Fairhurst when they stand at the cavity pressure.
 Rate-controlled injection with seepage is not coupled yet.
 
 Written: ``summary.json``, ``history.csv`` (cavity pressure and fluid in the
@@ -57,7 +59,10 @@ def seepage_ramp(scene: Scene) -> PressureRamp:
             f"the seepage ramp ends at the schedule's last time {t1:g} s, got {phys.duration:g} s",
         )
     rate = (p1 - p0) / t1
-    steps = max(1, math.ceil(phys.duration / phys.solver.time_step - 1e-9))
+    if phys.pressure_step is not None:  # the same pressure resolution at any rate
+        steps = max(1, math.ceil(rate * phys.duration / phys.pressure_step - 1e-9))
+    else:
+        steps = max(1, math.ceil(phys.duration / phys.solver.time_step - 1e-9))
     return PressureRamp(rate, p0 + rate * phys.duration, steps, initial_pressure=p0)
 
 
@@ -80,7 +85,9 @@ def run_seepage_ramp(
         "fill from dry"
     )
     result = ramp_breakdown(solid, cavity, phys.fluid, phys.joint_aperture, ramp, progress=say)
-    if result.initial_failures:
+    if result.stopped:
+        say(f"stopped: {result.stopped}")
+    elif result.initial_failures:
         say(f"initial state: {result.initial_failures} interfaces fail before the ramp")
     rows = [list(row) for row in result.history]
     write_csv(
@@ -90,15 +97,13 @@ def run_seepage_ramp(
         comm,
     )
     own = solid.owned
-    assert result.joint_pressure is not None and result.saturation is not None
+    zero = np.zeros(solid.num_facets)
+    pj = result.joint_pressure if result.joint_pressure is not None else zero
+    sat = result.saturation if result.saturation is not None else zero
     write_interfaces(
         out / "joints.vtu",
         solid.vertex_coords[own],
-        {
-            "saturation": result.saturation[own],
-            "pressure": result.joint_pressure[own],
-            "state": solid.state[own].astype(float),
-        },
+        {"saturation": sat[own], "pressure": pj[own], "state": solid.state[own].astype(float)},
         comm,
     )
     pb = result.pressure
@@ -116,14 +121,18 @@ def run_seepage_ramp(
             "point_m": [*map(float, location), *([0.0] * (3 - len(location)))],
             "mode": _MODES.get(int(result.mode or 0), "intact"),
         },
-        "peak_pressure_MPa": max(r[1] for r in result.history) / 1e6 if pb is None else pb / 1e6,
+        "peak_pressure_MPa": (
+            max((r[1] for r in result.history), default=ramp.initial_pressure) / 1e6
+            if pb is None
+            else pb / 1e6
+        ),
         "initial_failures": result.initial_failures,
         "joints_holding_pressure": result.wet_fraction,
         "wall_joint_pressure_ratio": result.wall_joint_pressure,
         "joint_aperture_m": phys.joint_aperture,
         "pressure_rate_MPa_per_s": ramp.rate / 1e6,
         "steps": result.steps,
-        "stopped": None,  # a ramp that breaks nothing is an answer, not a failure
+        "stopped": result.stopped,  # a ramp that breaks nothing is an answer, not a stop
     } | record()
     write_json(out / "summary.json", summary, comm)
     if comm.rank == 0 and rows:
@@ -137,7 +146,9 @@ def run_seepage_ramp(
             out / "pressure.png", curves, "time (s)", "pressure (MPa)", scene.name, MPI.COMM_SELF
         )
     comm.barrier()
-    if pb is None:
+    if result.stopped:
+        pass
+    elif pb is None:
         say(f"no joint broke up to {ramp.max_pressure / 1e6:.4g} MPa")
     else:
         say(
