@@ -10,6 +10,7 @@ transition at MPa/s rates.
 """
 
 import itertools
+import math
 
 import numpy as np
 import pytest
@@ -18,7 +19,7 @@ from mpi4py import MPI
 from hfcdem.config.materials import ElasticMaterial, Fluid, InSituStress, InterfaceModel
 from hfcdem.config.parts import MeshSizing, Plate, Wellbore
 from hfcdem.config.plates import BoreholeSquare
-from hfcdem.coupling.penetration import PressureRamp, ramp_breakdown
+from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakdown
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
@@ -110,6 +111,33 @@ def test_breakdown_falls_with_rate(plate):
     assert pb[0] - pb[-1] > 0.5 * (dry - wet)  # the sweep spans most of the transition
 
 
+def test_pumping_into_a_sealed_cavity_raises_its_pressure_linearly(plate):
+    # joints of 1 nm take nothing: the cavity's storage alone, then the dry first break
+    dry = _static_first_break(plate, joints_wet=False)
+    q = 2e-6  # m^2/s per metre of borehole (seed 001)
+    sealed = ramp_breakdown(_solid(plate), WALL, FLUID, 1e-9, CavityPumping(q, 40.0, steps=100))
+    # V / Kw + 2 pi a^2 (1 + nu) / E (plane strain, infinite plate): -0.8 % (the polygon
+    # of the wall and the fixed plate edge at 1 m)
+    closed = math.pi * A**2 / FLUID.bulk_modulus + 2 * math.pi * A**2 * 1.25 / 20e9
+    assert sealed.cavity_storage == pytest.approx(closed, rel=1e-2)
+    t, p = np.array([(h[0], h[1]) for h in sealed.history]).T
+    assert np.allclose(p, q * t / sealed.cavity_storage, rtol=1e-9)
+    assert sealed.pressure == pytest.approx(dry, rel=1e-9)
+    assert sealed.max_mass_error < 1e-12
+
+
+def test_pumping_faster_breaks_higher_and_keeps_the_mass(plate):
+    runs = [
+        ramp_breakdown(_solid(plate), WALL, FLUID, APERTURE, CavityPumping(q, 40.0 * 2e-6 / q))
+        for q in (2e-6, 2e-5)
+    ]
+    slow, fast = runs
+    assert slow.pressure < fast.pressure
+    assert slow.wet_fraction > 0.05 and fast.wet_fraction < slow.wet_fraction
+    # pumped = stored in the cavity + in the joints, every step, to the balance tolerance
+    assert max(slow.max_mass_error, fast.max_mass_error) < 1e-9
+
+
 @pytest.mark.mpi
 def test_ranks_agree(plate):
     world = _ramp(plate, 1e6, steps=60)
@@ -144,5 +172,9 @@ def test_bad_input(plate):
         PressureRamp(1.0, 1e6, steps=0)
     with pytest.raises(ValueError, match="filling"):
         PressureRamp(1.0, 1e6, filling="instant")
+    with pytest.raises(ValueError, match="rate"):
+        CavityPumping(0.0, 1.0)
+    with pytest.raises(ValueError, match="duration"):
+        CavityPumping(1e-6, -1.0)
     with pytest.raises(KeyError, match="no_such_group"):
         ramp_breakdown(_solid(plate), ("no_such_group",), FLUID, APERTURE, PressureRamp(1.0, 1e6))

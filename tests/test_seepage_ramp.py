@@ -16,7 +16,7 @@ from hfcdem.config.tables import SceneError
 from hfcdem.mesh.build import create_scene_mesh
 from hfcdem.solid.forms import Loads
 from hfcdem.workflows.run import build_solid, run_scene
-from hfcdem.workflows.seepage_ramp import seepage_ramp
+from hfcdem.workflows.seepage_ramp import seepage_loading
 
 SCENE = Path(__file__).resolve().parents[1] / "meshes/scenes/borehole_seepage.toml"
 A = 0.03  # borehole radius
@@ -27,7 +27,7 @@ def _scene(**overrides):
 
 
 def test_ramp_of_the_scene():
-    ramp = seepage_ramp(_scene())
+    ramp = seepage_loading(_scene())
     assert ramp.rate == pytest.approx(1e6)
     assert ramp.initial_pressure == 0.0 and ramp.max_pressure == pytest.approx(25e6)
     assert ramp.steps == 200 and ramp.filling == "saturation"
@@ -64,13 +64,13 @@ def test_bad_seepage_scenes_name_the_field():
     schedule = {f"injection.{k}": None for k in ("pressure_rate", "max_pressure", "pressure_step")}
     three = [["0 s", "0 MPa"], ["10 s", "10 MPa"], ["25 s", "25 MPa"]]
     with pytest.raises(SceneError, match="pressure ramp"):
-        seepage_ramp(
+        seepage_loading(
             _scene(
                 **schedule, **{"injection.pressure_schedule": three, "injection.duration": "25 s"}
             )
         )
     with pytest.raises(SceneError, match=r"injection\.duration"):
-        seepage_ramp(
+        seepage_loading(
             _scene(
                 **schedule,
                 **{
@@ -80,7 +80,7 @@ def test_bad_seepage_scenes_name_the_field():
             )
         )
     with pytest.raises(SceneError, match="must rise"):
-        seepage_ramp(
+        seepage_loading(
             _scene(
                 **schedule,
                 **{
@@ -100,10 +100,12 @@ def test_bad_seepage_scenes_name_the_field():
 
 
 def test_pressure_step_sets_the_steps_at_any_rate():
-    fast = seepage_ramp(_scene(**{"injection.pressure_rate": "100 MPa/s"}))
+    fast = seepage_loading(_scene(**{"injection.pressure_rate": "100 MPa/s"}))
     assert fast.steps == 200 and fast.max_pressure == pytest.approx(25e6)
     assert fast.dt == pytest.approx(0.125e6 / 100e6)
-    timed = seepage_ramp(_scene(**{"injection.pressure_step": None, "solver.time_step": "0.5 s"}))
+    timed = seepage_loading(
+        _scene(**{"injection.pressure_step": None, "solver.time_step": "0.5 s"})
+    )
     assert timed.steps == 50
 
 
@@ -121,3 +123,23 @@ def test_rock_that_fails_on_excavation_stops_the_run_cleanly(shared_tmp_path):
     assert summary["breakdown_pressure_MPa"] is None and summary["initial_failures"] > 1000
     stored = json.loads((out / "summary.json").read_text())
     assert stored["stopped"] == summary["stopped"]
+
+
+def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
+    pumped = {f"injection.{k}": None for k in ("pressure_rate", "max_pressure", "pressure_step")}
+    pumped |= {
+        "injection.rate": "2e-6 m3/s",  # seed 001's pumping, per metre
+        "injection.duration": "20 s",
+        "solver.time_step": "0.1 s",
+    }
+    scene = _scene(**pumped)
+    loading = seepage_loading(scene)
+    assert loading.rate == pytest.approx(2e-6) and loading.steps == 200
+    summary = run_scene(scene, shared_tmp_path / "pumped")
+    assert summary["pumping_rate_m3_per_s"] == pytest.approx(2e-6)
+    # between every joint at the cavity pressure (8.83 MPa) and dry joints (14.43 MPa)
+    assert 8.9 < summary["breakdown_pressure_MPa"] < 14.43
+    assert 0.0 < summary["joints_holding_pressure"] < 0.5
+    assert summary["max_mass_error"] < 1e-9
+    with pytest.raises(SceneError, match=r"injection\.wall_film"):
+        seepage_loading(_scene(**pumped, **{"injection.wall_film": "5 um"}))

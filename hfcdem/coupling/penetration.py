@@ -25,17 +25,23 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
+import dolfinx
 import numpy as np
+import ufl
 from mpi4py import MPI
 
 from hfcdem.config.materials import Fluid
-from hfcdem.coupling.condense import cavity_vertices
+from hfcdem.coupling.condense import cavity_vertices, mesh_cavity_volume
 from hfcdem.flow.seepage import JointSeepage, joint_network
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.equilibrium import critical_factor
 from hfcdem.solid.forms import Loads, combine
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import CascadeStopped
+
+#: the cavity balance of a pumped step holds to this fraction of the step's volume
+_BALANCE_TOLERANCE = 1e-10
+_BALANCE_ITERATIONS = 60
 
 
 @dataclass(frozen=True)
@@ -84,6 +90,51 @@ class PressureRamp:
 
 
 @dataclass(frozen=True)
+class CavityPumping:
+    """Pump ``rate`` (m^3/s; per metre in 2D) into the cavity for ``duration`` s.
+
+    The cavity stores ``V / Kw`` per pascal for its fluid (``V`` from the mesh
+    plus ``extra_volume``) and ``dV/dP`` of its walls (from the solid: one
+    solve at a unit cavity pressure); the joints at its wall take their share
+    each step, the cavity pressure being the one that balances the step's
+    volume.  ``steps`` equal steps; ``initial_pressure`` in the cavity at t = 0
+    (the joints start dry).
+    """
+
+    rate: float
+    duration: float
+    steps: int = 200
+    initial_pressure: float = 0.0
+    extra_volume: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("rate", "duration", "initial_pressure", "extra_volume"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(
+                    f"CavityPumping.{name} must be finite, got {getattr(self, name)!r}"
+                )
+        if not 0.0 < self.rate <= 10.0:
+            raise ValueError(f"CavityPumping.rate must be in (0, 10] m^3/s, got {self.rate!r}")
+        if not self.duration > 0.0:
+            raise ValueError(f"CavityPumping.duration must be > 0 s, got {self.duration!r}")
+        if self.initial_pressure < 0.0 or self.extra_volume < 0.0:
+            raise ValueError(
+                "CavityPumping.initial_pressure (Pa) and extra_volume (m^3) must be >= 0"
+            )
+        if not (isinstance(self.steps, int) and 1 <= self.steps <= 10**7):
+            raise ValueError(
+                f"CavityPumping.steps must be an integer in [1, 1e7], got {self.steps!r}"
+            )
+
+    @property
+    def dt(self) -> float:
+        """Time step (s)."""
+        return self.duration / self.steps
+
+    filling = "saturation"
+
+
+@dataclass(frozen=True)
 class RampBreakdown:
     """First break of a :class:`PressureRamp` (``pressure`` None: nothing broke).
 
@@ -92,6 +143,9 @@ class RampBreakdown:
     wall over the cavity pressure, at the break;
     ``joint_pressure``, ``saturation``: per local facet of the solid (0 off the
     joints) at the break, or at the end of the ramp;
+    ``cavity_storage``: m^3 per Pa of the pumped cavity (None for a ramp);
+    ``max_mass_error``: largest ``|pumped - stored in the cavity - in the
+    joints|`` of a step over the pumped volume;
     ``stopped``: why no ramp ran (the excavated state cascades);
     ``initial_failures``: joints broken at the start, before the ramp (not
     the breakdown; they hold no fluid); ``history``: per step
@@ -111,6 +165,8 @@ class RampBreakdown:
     joint_pressure: np.ndarray | None = None
     saturation: np.ndarray | None = None
     stopped: str | None = None
+    cavity_storage: float | None = None
+    max_mass_error: float = 0.0
 
 
 def ramp_breakdown(
@@ -118,10 +174,14 @@ def ramp_breakdown(
     cavity: Sequence[str],
     fluid: Fluid,
     aperture: float | np.ndarray,
-    ramp: PressureRamp,
+    ramp: PressureRamp | CavityPumping,
     progress: Callable[[str], None] | None = None,
 ) -> RampBreakdown:
     """Raise the pressure of the ``cavity`` facet groups until the first joint breaks (collective).
+
+    ``ramp``: the cavity pressure as a :class:`PressureRamp`, or a
+    :class:`CavityPumping` rate into the cavity (its pressure follows from its
+    storage and the joints' intake).
 
     ``solid`` must be in the full mode with every interface intact or a
     pre-existing crack; ``aperture``: hydraulic aperture of the joints (m), one
@@ -171,14 +231,27 @@ def ramp_breakdown(
         cav = {name: pw for name in cavity}
         return Loads(cavity=cav, joint_pressure=per_facet(pj), in_situ_factor=in_situ)
 
+    storage = None
+    if isinstance(ramp, CavityPumping):
+        storage = _cavity_storage(solid, cavity, fluid, ramp.extra_volume)
+    joints0 = float(seep.content.sum())
     dt = ramp.dt
     t, pw = 0.0, ramp.initial_pressure
     pj = seep.pressure
     history: list[tuple[float, float, float, float]] = []
+    worst = 0.0
     try:
         for n in range(1, ramp.steps + 1):
-            pw_new = ramp.initial_pressure + ramp.rate * n * dt
-            pj_new = seep.step(dt, pw_new)
+            if isinstance(ramp, PressureRamp):
+                pw_new = ramp.initial_pressure + ramp.rate * n * dt
+                seep.step(dt, pw_new)
+            else:
+                assert storage is not None
+                pw_new = _balance_cavity(seep, dt, pw, ramp.rate * dt, storage)
+                stored = storage * (pw_new - ramp.initial_pressure)
+                balance = ramp.rate * n * dt - stored - (float(seep.content.sum()) - joints0)
+                worst = max(worst, abs(balance) / (ramp.rate * n * dt))
+            pj_new = seep.pressure
             base = loads_at(pw, pj)
             unit = loads_at(pw_new - pw, pj_new - pj, in_situ=0.0)
             solid.solve(base, unit)
@@ -208,6 +281,8 @@ def ramp_breakdown(
                     history=history,
                     joint_pressure=per_facet(pj_break),
                     saturation=per_facet(seep.saturation),
+                    cavity_storage=storage,
+                    max_mass_error=worst,
                 )
             t, pw, pj = t + dt, pw_new, pj_new
     finally:
@@ -224,6 +299,69 @@ def ramp_breakdown(
         history,
         per_facet(pj),
         per_facet(seep.saturation),
+        cavity_storage=storage,
+        max_mass_error=worst,
+    )
+
+
+def _cavity_storage(solid: CDEMSolid, cavity: Sequence[str], fluid: Fluid, extra: float) -> float:
+    """Fluid the cavity takes per pascal: ``V / Kw`` plus its walls' ``dV/dP`` (collective).
+
+    The wall term is one solve at a unit cavity pressure: ``-int u.n ds`` with
+    ``n`` out of the rock (the walls move into the rock as the pressure rises).
+    """
+    volume = mesh_cavity_volume(solid, cavity) + extra
+    solid.solve(Loads(cavity={name: 1.0 for name in cavity}, in_situ_factor=0.0))
+    n = ufl.FacetNormal(solid.mesh)
+    form = sum(-ufl.dot(solid.u, n) * solid.tmesh.ds(name) for name in cavity)
+    local = dolfinx.fem.assemble_scalar(dolfinx.fem.form(form))
+    wall = float(solid.comm.allreduce(local, op=MPI.SUM))
+    return volume / fluid.bulk_modulus + wall
+
+
+def _balance_cavity(
+    seep: JointSeepage, dt: float, p_old: float, volume: float, storage: float
+) -> float:
+    """Cavity pressure at the end of a step that pumps ``volume`` into it; steps ``seep`` there.
+
+    The pressure balances ``storage (P - P_old) + (intake of the joints) = volume``;
+    the intake grows with ``P``, so the residual is monotone: a bracketed secant
+    (Illinois) finds it, each evaluation one seepage step from the same state.
+    """
+    saved = seep.save()
+
+    def residual(p: float) -> float:
+        seep.restore(saved)
+        seep.step(dt, p)
+        return storage * (p - p_old) + seep.flux_into_network() - volume
+
+    tol = _BALANCE_TOLERANCE * volume
+    lo, hi = p_old, p_old + volume / storage
+    r_lo, r_hi = residual(lo), residual(hi)
+    while r_hi < 0.0:  # the joints push fluid back into the cavity: look higher
+        lo, r_lo, hi = hi, r_hi, hi + 2.0 * (hi - p_old)
+        r_hi = residual(hi)
+    if r_lo > 0.0:  # the joints take more than is pumped: the pressure falls
+        lo, r_lo = 0.0, residual(0.0)
+    side = 0
+    for _ in range(_BALANCE_ITERATIONS):
+        p = (lo * r_hi - hi * r_lo) / (r_hi - r_lo) if r_hi != r_lo else 0.5 * (lo + hi)
+        r = residual(p)
+        if abs(r) <= tol or hi - lo <= 1e-12 * max(abs(hi), 1.0):
+            return p
+        if r > 0.0:
+            hi, r_hi = p, r
+            if side == 1:
+                r_lo *= 0.5
+            side = 1
+        else:
+            lo, r_lo = p, r
+            if side == -1:
+                r_hi *= 0.5
+            side = -1
+    raise RuntimeError(
+        f"cavity balance did not converge in {_BALANCE_ITERATIONS} seepage steps "
+        f"(dt = {dt!r} s, residual {r:.3g} m^3 of {volume:.3g}); try a smaller time step"
     )
 
 

@@ -186,6 +186,17 @@ class JointSeepage:
         """Facet of every cavity connection, in connection order."""
         return np.asarray(self.net.pair_facets[0][self._cavity])
 
+    def save(self) -> np.ndarray:
+        """Return the state of every facet (a copy) for :meth:`restore` (trial steps)."""
+        return self._q.copy()
+
+    def restore(self, saved: np.ndarray) -> None:
+        """Return to a state from :meth:`save` (e.g. to repeat a step at another pressure)."""
+        arr = np.asarray(saved, dtype=float)
+        if arr.shape != self._q.shape:
+            raise ValueError(f"saved state must hold {self._q.shape[0]} values, got {arr.shape}")
+        self._q = arr.copy()
+
     def stored(self) -> float:
         """Content above full joints at zero pressure: ``sum V q / Kw`` (m^3).
 

@@ -29,7 +29,7 @@ from mpi4py import MPI
 
 from hfcdem.config.scene import Scene
 from hfcdem.config.tables import SceneError
-from hfcdem.coupling.penetration import PressureRamp, ramp_breakdown
+from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakdown
 from hfcdem.io.files import write_csv, write_interfaces, write_json
 from hfcdem.io.plots import plot_lines
 from hfcdem.solid.cdem import CDEMSolid
@@ -37,16 +37,36 @@ from hfcdem.solid.cdem import CDEMSolid
 _MODES = {1: "tensile", 2: "shear"}
 
 
-def seepage_ramp(scene: Scene) -> PressureRamp:
-    """Return the :class:`PressureRamp` of a ``wall_joints = "seepage"`` scene (clear errors)."""
+def seepage_loading(scene: Scene) -> PressureRamp | CavityPumping:
+    """Return how a ``wall_joints = "seepage"`` scene loads its cavity (clear errors).
+
+    A constant ``rate`` pumps into the cavity (:class:`CavityPumping`); a linear
+    pressure ramp drives it (:class:`PressureRamp`).
+    """
     phys = scene.physics
     inj = phys.injection
     points: tuple[tuple[float, float], ...] = inj.points if inj is not None else ()
-    if inj is None or inj.rate_controlled or len(points) != 2 or points[0][0] != 0.0:
+    steps = max(1, math.ceil(phys.duration / phys.solver.time_step - 1e-9))
+    if inj is not None and inj.rate_controlled:
+        if len(points) != 1:
+            raise SceneError(
+                "injection.rate_schedule",
+                "wall_joints = 'seepage' pumps at one constant rate: give rate",
+            )
+        if phys.wall_film is not None:
+            raise SceneError(
+                "injection.wall_film",
+                "seepage runs store fluid in the cavity of the mesh (plus extra_volume) and "
+                "in the joints: drop wall_film",
+            )
+        return CavityPumping(
+            points[0][1], phys.duration, steps, phys.initial_pressure, phys.extra_volume
+        )
+    if inj is None or len(points) != 2 or points[0][0] != 0.0:
         raise SceneError(
             "injection",
-            "wall_joints = 'seepage' runs a pressure ramp: give pressure_schedule = "
-            "[['0 s', P0], [t1, P1]] (rate-controlled injection with seepage is not coupled yet)",
+            "wall_joints = 'seepage' runs a pressure ramp (pressure_rate, or pressure_schedule = "
+            "[['0 s', P0], [t1, P1]]) or pumps at a constant rate",
         )
     p0, (t1, p1) = points[0][1], points[1]
     if not p1 > p0:
@@ -61,8 +81,6 @@ def seepage_ramp(scene: Scene) -> PressureRamp:
     rate = (p1 - p0) / t1
     if phys.pressure_step is not None:  # the same pressure resolution at any rate
         steps = max(1, math.ceil(rate * phys.duration / phys.pressure_step - 1e-9))
-    else:
-        steps = max(1, math.ceil(phys.duration / phys.solver.time_step - 1e-9))
     return PressureRamp(rate, p0 + rate * phys.duration, steps, initial_pressure=p0)
 
 
@@ -76,13 +94,16 @@ def run_seepage_ramp(
 ) -> dict[str, Any]:
     """Run the ramp of a seepage scene on ``solid`` and write its results into ``out``."""
     phys, comm = scene.physics, solid.comm
-    ramp = seepage_ramp(scene)
+    ramp = seepage_loading(scene)
     if solid.mode != "full":
         raise SceneError("solver.solid", "wall_joints = 'seepage' needs solid = 'full'")
+    if isinstance(ramp, CavityPumping):
+        what = f"pumping {ramp.rate:.4g} m3/s into the cavity for {ramp.duration:.4g} s"
+    else:
+        what = f"a ramp of {ramp.rate / 1e6:.4g} MPa/s"
     say(
-        f"seepage ramp: {ramp.rate / 1e6:.4g} MPa/s from {ramp.initial_pressure / 1e6:.4g} MPa, "
-        f"{ramp.steps} steps; joints of hydraulic aperture {phys.joint_aperture * 1e6:.3g} um "
-        "fill from dry"
+        f"seepage: {what} from {ramp.initial_pressure / 1e6:.4g} MPa, {ramp.steps} steps; "
+        f"joints of hydraulic aperture {phys.joint_aperture * 1e6:.3g} um fill from dry"
     )
     result = ramp_breakdown(solid, cavity, phys.fluid, phys.joint_aperture, ramp, progress=say)
     if result.stopped:
@@ -130,7 +151,10 @@ def run_seepage_ramp(
         "joints_holding_pressure": result.wet_fraction,
         "wall_joint_pressure_ratio": result.wall_joint_pressure,
         "joint_aperture_m": phys.joint_aperture,
-        "pressure_rate_MPa_per_s": ramp.rate / 1e6,
+        "pressure_rate_MPa_per_s": ramp.rate / 1e6 if isinstance(ramp, PressureRamp) else None,
+        "pumping_rate_m3_per_s": ramp.rate if isinstance(ramp, CavityPumping) else None,
+        "cavity_storage_m3_per_Pa": result.cavity_storage,
+        "max_mass_error": result.max_mass_error,
         "steps": result.steps,
         "stopped": result.stopped,  # a ramp that breaks nothing is an answer, not a stop
     } | record()
@@ -149,7 +173,8 @@ def run_seepage_ramp(
     if result.stopped:
         pass
     elif pb is None:
-        say(f"no joint broke up to {ramp.max_pressure / 1e6:.4g} MPa")
+        top = max((r[1] for r in result.history), default=ramp.initial_pressure)
+        say(f"no joint broke up to {top / 1e6:.4g} MPa")
     else:
         say(
             f"first break {pb / 1e6:.4g} MPa at {result.time:.4g} s "
@@ -159,4 +184,4 @@ def run_seepage_ramp(
     return summary
 
 
-__all__ = ["run_seepage_ramp", "seepage_ramp"]
+__all__ = ["run_seepage_ramp", "seepage_loading"]
