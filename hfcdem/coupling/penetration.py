@@ -213,95 +213,116 @@ def ramp_breakdown(
             stop.broken,
             stopped=f"the excavated rock fails before the ramp: {stop}",
         )
-    joints = np.flatnonzero((solid.state == FacetState.INTACT) & ~solid.is_crack)
-    net = joint_network(solid, cavity_vertices(solid, cavity, None), joints)
-    local = _network_positions(solid, net.index(), joints)
-    if ramp.filling == "saturation":  # dry joints hold no pressure
-        seep = JointSeepage(net, aperture, fluid, filling="saturation", saturation=0.0)
-    else:
-        seep = JointSeepage(net, aperture, fluid, pressure=ramp.initial_pressure)
-    wall = np.unique(seep.cavity_facets)
-
-    def per_facet(values: np.ndarray) -> np.ndarray:
-        out = np.zeros(solid.num_facets)
-        out[joints] = values[local]
-        return out
-
-    def loads_at(pw: float, pj: np.ndarray, in_situ: float = 1.0) -> Loads:
-        cav = {name: pw for name in cavity}
-        return Loads(cavity=cav, joint_pressure=per_facet(pj), in_situ_factor=in_situ)
-
-    storage = None
-    if isinstance(ramp, CavityPumping):
-        storage = _cavity_storage(solid, cavity, fluid, ramp.extra_volume)
-    joints0 = float(seep.content.sum())
-    dt = ramp.dt
-    t, pw = 0.0, ramp.initial_pressure
-    pj = seep.pressure
+    drive = _Drive(solid, tuple(cavity), fluid, aperture, ramp)
+    t, pw, pj = 0.0, ramp.initial_pressure, drive.seep.pressure
     history: list[tuple[float, float, float, float]] = []
-    worst = 0.0
     try:
         for n in range(1, ramp.steps + 1):
-            if isinstance(ramp, PressureRamp):
-                pw_new = ramp.initial_pressure + ramp.rate * n * dt
-                seep.step(dt, pw_new)
-            else:
-                assert storage is not None
-                pw_new = _balance_cavity(seep, dt, pw, ramp.rate * dt, storage)
-                stored = storage * (pw_new - ramp.initial_pressure)
-                balance = ramp.rate * n * dt - stored - (float(seep.content.sum()) - joints0)
-                worst = max(worst, abs(balance) / (ramp.rate * n * dt))
-            pj_new = seep.pressure
-            base = loads_at(pw, pj)
-            unit = loads_at(pw_new - pw, pj_new - pj, in_situ=0.0)
+            pw_new = drive.advance(n, pw)
+            pj_new = drive.seep.pressure
+            base = drive.loads(pw, pj)
+            unit = drive.loads(pw_new - pw, pj_new - pj, in_situ=0.0)
             solid.solve(base, unit)
             crit = critical_factor(solid, base, unit, 0.0, 1.0, 8)
             s = solid.comm.allreduce(float(crit.min()) if crit.size else math.inf, op=MPI.MIN)
-            history.append((t + dt, pw_new, float(seep.content.sum()), s))
+            history.append((t + ramp.dt, pw_new, float(drive.seep.content.sum()), s))
             if progress is not None and (n % max(1, ramp.steps // 10) == 0 or math.isfinite(s)):
                 progress(
-                    f"  t {t + dt:.4g} s, cavity {pw_new / 1e6:.4g} MPa, "
+                    f"  t {t + ramp.dt:.4g} s, cavity {pw_new / 1e6:.4g} MPa, "
                     f"joints holding pressure {np.mean(pj_new > 0):.1%}"
                 )
             if math.isfinite(s):
-                p_break = pw + s * (pw_new - pw)
-                pj_break = pj + s * (pj_new - pj)
                 mode, where = _first_facet(solid, base, unit, s, crit)
-                return RampBreakdown(
-                    pressure=p_break,
-                    time=t + s * dt,
-                    mode=mode,
-                    location=where,
-                    wet_fraction=float(np.mean(pj_break > 0.0)) if net.size else 0.0,
-                    wall_joint_pressure=float(np.mean(pj_break[wall]) / p_break)
-                    if wall.size
-                    else 0.0,
-                    steps=n,
-                    initial_failures=initial_failures,
-                    history=history,
-                    joint_pressure=per_facet(pj_break),
-                    saturation=per_facet(seep.saturation),
-                    cavity_storage=storage,
-                    max_mass_error=worst,
-                )
-            t, pw, pj = t + dt, pw_new, pj_new
+                broke = (pw + s * (pw_new - pw), t + s * ramp.dt, mode, where)
+                return drive.result(broke, pj + s * (pj_new - pj), n, initial_failures, history)
+            t, pw, pj = t + ramp.dt, pw_new, pj_new
     finally:
-        seep.destroy()
-    return RampBreakdown(
-        None,
-        None,
-        None,
-        None,
-        float(np.mean(pj > 0.0)) if net.size else 0.0,
-        0.0,
-        ramp.steps,
-        initial_failures,
-        history,
-        per_facet(pj),
-        per_facet(seep.saturation),
-        cavity_storage=storage,
-        max_mass_error=worst,
-    )
+        drive.seep.destroy()
+    return drive.result(None, pj, ramp.steps, initial_failures, history)
+
+
+class _Drive:
+    """The joints' seepage and the cavity pressure that drives it, step by step."""
+
+    def __init__(
+        self,
+        solid: CDEMSolid,
+        cavity: tuple[str, ...],
+        fluid: Fluid,
+        aperture: float | np.ndarray,
+        ramp: PressureRamp | CavityPumping,
+    ) -> None:
+        self.solid, self.cavity, self.ramp = solid, cavity, ramp
+        self.joints = np.flatnonzero((solid.state == FacetState.INTACT) & ~solid.is_crack)
+        self.net = joint_network(solid, cavity_vertices(solid, cavity, None), self.joints)
+        self.local = _network_positions(solid, self.net.index(), self.joints)
+        if ramp.filling == "saturation":  # dry joints hold no pressure
+            self.seep = JointSeepage(
+                self.net, aperture, fluid, filling="saturation", saturation=0.0
+            )
+        else:
+            self.seep = JointSeepage(self.net, aperture, fluid, pressure=ramp.initial_pressure)
+        self.wall = np.unique(self.seep.cavity_facets)
+        self.storage = None
+        if isinstance(ramp, CavityPumping):
+            self.storage = _cavity_storage(solid, cavity, fluid, ramp.extra_volume)
+        self.joints0 = float(self.seep.content.sum())
+        self.worst = 0.0  # largest relative mass balance error of a pumped step
+
+    def per_facet(self, values: np.ndarray) -> np.ndarray:
+        """Network values on the solid's local facets (0 off the joints)."""
+        out = np.zeros(self.solid.num_facets)
+        out[self.joints] = values[self.local]
+        return out
+
+    def loads(self, pw: float, pj: np.ndarray, in_situ: float = 1.0) -> Loads:
+        """Return the loads of the cavity at ``pw`` and the joints at ``pj`` (network order)."""
+        cav = {name: pw for name in self.cavity}
+        return Loads(cavity=cav, joint_pressure=self.per_facet(pj), in_situ_factor=in_situ)
+
+    def advance(self, n: int, pw: float) -> float:
+        """Step the seepage to the end of step ``n``; return the cavity pressure there."""
+        ramp, dt = self.ramp, self.ramp.dt
+        if isinstance(ramp, PressureRamp):
+            pw_new = ramp.initial_pressure + ramp.rate * n * dt
+            self.seep.step(dt, pw_new)
+            return pw_new
+        assert self.storage is not None
+        pw_new = _balance_cavity(self.seep, dt, pw, ramp.rate * dt, self.storage)
+        pumped = ramp.rate * n * dt
+        stored = self.storage * (pw_new - ramp.initial_pressure)
+        error = pumped - stored - (float(self.seep.content.sum()) - self.joints0)
+        self.worst = max(self.worst, abs(error) / pumped)
+        return pw_new
+
+    def result(
+        self,
+        broke: tuple[float, float, int, np.ndarray] | None,
+        pj: np.ndarray,
+        steps: int,
+        initial_failures: int,
+        history: list[tuple[float, float, float, float]],
+    ) -> RampBreakdown:
+        """Return the answer; ``broke``: (pressure, time, mode, location) of the first break."""
+        wet = float(np.mean(pj > 0.0)) if self.net.size else 0.0
+        wall = 0.0
+        if broke is not None and self.wall.size:
+            wall = float(np.mean(pj[self.wall]) / broke[0])
+        return RampBreakdown(
+            pressure=None if broke is None else broke[0],
+            time=None if broke is None else broke[1],
+            mode=None if broke is None else broke[2],
+            location=None if broke is None else broke[3],
+            wet_fraction=wet,
+            wall_joint_pressure=wall,
+            steps=steps,
+            initial_failures=initial_failures,
+            history=history,
+            joint_pressure=self.per_facet(pj),
+            saturation=self.per_facet(self.seep.saturation),
+            cavity_storage=self.storage,
+            max_mass_error=self.worst,
+        )
 
 
 def _cavity_storage(solid: CDEMSolid, cavity: Sequence[str], fluid: Fluid, extra: float) -> float:
