@@ -154,6 +154,7 @@ class JointSeepage:
         t = self.transmissibility
         self._pairs = Pairs(fa[inner], fb[inner], t[inner], fa[~inner], t[~inner], n)
         self._solver: tuple[float, PETSc.KSP] | None = None
+        self._fill_solver: PETSc.KSP | None = None  # saturation filling's Newton matrix
         self._injected = 0.0
         self._iterations = 0
 
@@ -302,12 +303,17 @@ class JointSeepage:
     def _linear_solve(self, lin: Linearisation, shift: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         indptr, indices, inverse, count = self._pattern
         data = np.bincount(inverse, weights=lin.values, minlength=count)
-        ksp = _lu((indptr, indices, data), self._diag, shift)
-        try:
-            return _solve(ksp, rhs)
-        finally:
-            ksp.getOperators()[0].destroy()
-            ksp.destroy()
+        if self._fill_solver is None:  # one matrix and KSP for every Newton solve
+            self._fill_solver = _lu((indptr, indices, data), self._diag, shift)
+        else:  # the same pattern: PETSc keeps the symbolic factorisation
+            values = data.copy()
+            values[self._diag] += shift
+            mat = self._fill_solver.getOperators()[0]
+            itype = PETSc.IntType
+            mat.setValuesCSR(indptr.astype(itype), indices.astype(itype), values)
+            mat.assemble()
+            self._fill_solver.setOperators(mat)
+        return _solve(self._fill_solver, rhs)
 
     def steady(self, cavity_pressure: float | np.ndarray) -> np.ndarray:
         """Steady facet pressures for ``cavity_pressure`` (the state is not changed).
@@ -327,12 +333,16 @@ class JointSeepage:
             ksp.destroy()
 
     def destroy(self) -> None:
-        """Free the kept factorisation (a new time step size factorises again)."""
+        """Free the kept factorisations (a new time step size factorises again)."""
         if self._solver is not None:
             ksp = self._solver[1]
             ksp.getOperators()[0].destroy()
             ksp.destroy()
             self._solver = None
+        if self._fill_solver is not None:
+            self._fill_solver.getOperators()[0].destroy()
+            self._fill_solver.destroy()
+            self._fill_solver = None
 
     def _cavity_load(self, pc: np.ndarray) -> np.ndarray:
         load = np.zeros(self.net.size)
