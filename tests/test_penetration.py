@@ -104,7 +104,9 @@ def test_slow_ramp_breaks_with_joints_at_cavity_pressure(plate):
 def test_breakdown_falls_with_rate(plate):
     dry = _static_first_break(plate, joints_wet=False)
     wet = _static_first_break(plate, joints_wet=True)
-    pb = [_ramp(plate, rate).pressure for rate in (1e9, 1e7, 1e6, 1e5)]
+    # away from the jump (0.15-0.5 of A t_h / P_dry: 4e6-1.5e7 Pa/s here), where one wall joint
+    # filling a step earlier or later (time step, ranks) decides
+    pb = [_ramp(plate, rate).pressure for rate in (1e9, 1e6, 1e5, 1e4)]
     assert all(b is not None for b in pb)
     assert all(wet * (1 - 1e-6) <= b <= dry * (1 + 1e-9) for b in pb)
     assert all(a > b for a, b in itertools.pairwise(pb))
