@@ -174,6 +174,8 @@ class CDEMSolid:
         self._recovery = StressRecovery(self.u, material)
         self._reduced: ReducedSystem | None = None
         self._reduced_version = -1
+        # the compiled stiffness form of the last interface states (a new one costs ~60 ms)
+        self._stiffness_form: tuple[np.ndarray, int, dolfinx.fem.Form] | None = None
         self.operator = StiffnessOperator(
             self.comm,
             lambda: self.assemble_stiffness()[1],
@@ -362,10 +364,18 @@ class CDEMSolid:
         (:class:`~hfcdem.solid.operator.StiffnessOperator`).
         """
         t0 = time.perf_counter()
-        a_form = dolfinx.fem.form(self.forms.stiffness(self._measure()))
+        values = interface_values(self.states)
+        cached = self._stiffness_form
+        stale = cached is None or cached[1] != self.band.version
+        stale = stale or not np.array_equal(cached[0], values)  # type: ignore[index]
+        if self.comm.allreduce(stale, op=MPI.LOR):  # compiling a form is collective
+            form = dolfinx.fem.form(self.forms.stiffness(self._measure()))
+            self._stiffness_form = cached = (values.copy(), self.band.version, form)
+        assert cached is not None
+        a_form = cached[2]
         reduced = self.reduced_system() if self.mode == "reduced" else None
         ksp = self.operator.solver(
-            interface_values(self.states),
+            values,
             self.band.version,
             reduced.reduce if reduced is not None else None,
         )
