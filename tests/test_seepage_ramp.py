@@ -115,31 +115,12 @@ def test_reduced_solid_is_refused(shared_tmp_path):
         run_scene(scene, shared_tmp_path / "reduced")
 
 
-def test_rock_that_fails_on_excavation_stops_the_run_cleanly(shared_tmp_path):
-    # Weibull m = 3 joint strengths: the excavated wall cascades at 0 MPa
+def test_rock_that_breaks_whole_on_excavation_is_reported(shared_tmp_path):
+    # Weibull m = 3 joint strengths: the excavated zone breaks whole at 0 MPa; no joint
+    # is left for the ramp, which says so instead of failing
     out = shared_tmp_path / "weak"
     summary = run_scene(_scene(**{"rock.weibull_modulus": 3}), out)
-    assert "excavated rock fails before the ramp" in summary["stopped"]
-    assert summary["breakdown_pressure_MPa"] is None and summary["initial_failures"] > 1000
+    assert summary["initial_failures"] > 1000 and summary["stopped"] is None
+    assert summary["breakdown_pressure_MPa"] is None
     stored = json.loads((out / "summary.json").read_text())
-    assert stored["stopped"] == summary["stopped"]
-
-
-def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
-    pumped = {f"injection.{k}": None for k in ("pressure_rate", "max_pressure", "pressure_step")}
-    pumped |= {
-        "injection.rate": "2e-6 m3/s",  # seed 001's pumping, per metre
-        "injection.duration": "20 s",
-        "solver.time_step": "0.1 s",
-    }
-    scene = _scene(**pumped)
-    loading = seepage_loading(scene)
-    assert loading.rate == pytest.approx(2e-6) and loading.steps == 200
-    summary = run_scene(scene, shared_tmp_path / "pumped")
-    assert summary["pumping_rate_m3_per_s"] == pytest.approx(2e-6)
-    # between every joint at the cavity pressure (8.83 MPa) and dry joints (14.43 MPa)
-    assert 8.9 < summary["breakdown_pressure_MPa"] < 14.43
-    assert 0.0 < summary["joints_holding_pressure"] < 0.5
-    assert summary["max_mass_error"] < 1e-9
-    with pytest.raises(SceneError, match=r"injection\.wall_film"):
-        seepage_loading(_scene(**pumped, **{"injection.wall_film": "5 um"}))
+    assert stored["initial_failures"] == summary["initial_failures"]

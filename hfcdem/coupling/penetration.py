@@ -32,6 +32,7 @@ from mpi4py import MPI
 
 from hfcdem.config.materials import Fluid
 from hfcdem.coupling.condense import cavity_vertices, mesh_cavity_volume
+from hfcdem.coupling.events import facets_to_break, switch_contacts
 from hfcdem.flow.seepage import JointSeepage, joint_network
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.equilibrium import critical_factor
@@ -200,7 +201,7 @@ def ramp_breakdown(
         joint_pressure=np.where(np.isin(np.arange(solid.num_facets), joints), p0, 0.0),
     )
     try:
-        initial_failures = solid.equilibrate(start)
+        initial_failures = _settle(solid, start)
     except CascadeStopped as stop:  # the excavated rock does not stand: no ramp to run
         return RampBreakdown(
             None,
@@ -229,7 +230,7 @@ def ramp_breakdown(
             if progress is not None and (n % max(1, ramp.steps // 10) == 0 or math.isfinite(s)):
                 progress(
                     f"  t {t + ramp.dt:.4g} s, cavity {pw_new / 1e6:.4g} MPa, "
-                    f"joints holding pressure {np.mean(pj_new > 0):.1%}"
+                    f"joints holding pressure {np.mean(pj_new > 0) if pj_new.size else 0.0:.1%}"
                 )
             if math.isfinite(s):
                 mode, where = _first_facet(solid, base, unit, s, crit)
@@ -323,6 +324,30 @@ class _Drive:
             cavity_storage=self.storage,
             max_mass_error=self.worst,
         )
+
+
+def _settle(solid: CDEMSolid, loads: Loads, max_iterations: int = 200) -> int:
+    """Break what ``loads`` over-stress, switching contacts, until nothing changes.
+
+    As the coupled step does (:func:`hfcdem.coupling.events.switch_contacts`):
+    after one round of contact switches since the last break, faces may only
+    close, which ends the chatter of dry broken faces at the excavated wall.
+    Returns the global number broken; :class:`CascadeStopped` if it does not settle.
+    """
+    broken, rounds = 0, 0
+    for _ in range(max_iterations):
+        solid.solve(loads)
+        ratio, mode = solid.overstress(loads)
+        chosen = facets_to_break(solid, ratio, None)
+        count = int(solid.comm.allreduce(len(chosen), op=MPI.SUM))
+        if count:
+            solid.break_facets(chosen, mode[chosen], 0.0)
+            broken, rounds = broken + count, 0
+            continue
+        if switch_contacts(solid, loads, only_closing=rounds >= 1) == 0:
+            return broken
+        rounds += 1
+    raise CascadeStopped(0.0, broken, max_iterations)
 
 
 def _cavity_storage(solid: CDEMSolid, cavity: Sequence[str], fluid: Fluid, extra: float) -> float:
