@@ -124,3 +124,23 @@ def test_rock_that_breaks_whole_on_excavation_is_reported(shared_tmp_path):
     assert summary["breakdown_pressure_MPa"] is None
     stored = json.loads((out / "summary.json").read_text())
     assert stored["initial_failures"] == summary["initial_failures"]
+
+
+def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
+    pumped = {f"injection.{k}": None for k in ("pressure_rate", "max_pressure", "pressure_step")}
+    pumped |= {
+        "injection.rate": "2e-6 m3/s",  # seed 001's pumping, per metre
+        "injection.duration": "20 s",
+        "solver.time_step": "0.1 s",
+    }
+    scene = _scene(**pumped)
+    loading = seepage_loading(scene)
+    assert loading.rate == pytest.approx(2e-6) and loading.steps == 200
+    summary = run_scene(scene, shared_tmp_path / "pumped")
+    assert summary["pumping_rate_m3_per_s"] == pytest.approx(2e-6)
+    # between every joint at the cavity pressure (8.83 MPa) and dry joints (14.43 MPa)
+    assert 8.9 < summary["breakdown_pressure_MPa"] < 14.43
+    assert 0.0 < summary["joints_holding_pressure"] < 0.5
+    assert summary["max_mass_error"] < 1e-9
+    with pytest.raises(SceneError, match=r"injection\.wall_film"):
+        seepage_loading(_scene(**pumped, **{"injection.wall_film": "5 um"}))
