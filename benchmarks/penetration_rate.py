@@ -27,35 +27,24 @@ from pathlib import Path
 
 import numpy as np
 from mpi4py import MPI
+from wall_joint_verification import SH, T0, A, borehole_mesh, borehole_solid
 
-from hfcdem.config.materials import ElasticMaterial, Fluid, InSituStress, InterfaceModel
-from hfcdem.config.parts import MeshSizing, Plate, Wellbore
-from hfcdem.config.plates import BoreholeSquare
+from hfcdem.config.materials import Fluid
 from hfcdem.coupling.penetration import PressureRamp, ramp_breakdown
 from hfcdem.io.plots import plot_lines
-from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import CascadeStopped
 
-A, SH, SHMIN, T0 = 0.03, 20e6, 12e6, 5e6
+SHMIN = 12e6
 WALL = ("wellbore_wall",)
 HW = 3 * SHMIN - SH + T0
 HF = HW / 2
 
 
 def _solid(tmesh) -> CDEMSolid:  # type: ignore[no-untyped-def]
-    return CDEMSolid(
-        tmesh,
-        ElasticMaterial(20e9, 0.25),
-        InSituStress(sh_max=SH, sh_min=SHMIN, sv=SH),
-        InterfaceModel(
-            alpha=100, tensile_strength=T0, cohesion=60e6, friction_angle=30, break_rule="all"
-        ),
-        zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
-        fixed=tmesh.facet_groups("outer"),
-    )
+    return borehole_solid(tmesh, SHMIN)
 
 
 def _limit(tmesh, wet: bool) -> float:  # type: ignore[no-untyped-def]
@@ -78,10 +67,7 @@ def _limits_table(divisions: list[int], say) -> None:  # type: ignore[no-untyped
     say("|---|---|---|---|---|---|---|---|---|")
     last = None
     for div in divisions:
-        sizing = MeshSizing(
-            A / div, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
-        )
-        tmesh = mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing))
+        tmesh = borehole_mesh(A / div)
         dry, wet = _limit(tmesh, False), _limit(tmesh, True)
         cells = ["", "", "", ""]
         if last is not None:  # errors O(h): 2 P(h) - P(2h)
@@ -123,10 +109,7 @@ def main() -> None:
     styles = iter(["o-", "s-", "^-", "d-"])
     for div in args.divisions:
         h = A / div
-        sizing = MeshSizing(
-            h, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
-        )
-        tmesh = mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing))
+        tmesh = borehole_mesh(h)
         dry, wet = _limit(tmesh, False), _limit(tmesh, True)
         t_h = 6 * args.viscosity * h**2 / (args.aperture**2 * dry)
         say(

@@ -21,19 +21,23 @@ from hfcdem.config.parts import MeshSizing, Plate, Wellbore
 from hfcdem.config.plates import BoreholeSquare
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture
 from hfcdem.mesh.build import mesh_geometry
+from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solid.cdem import CDEMSolid
 
 A, SH, T0 = 0.03, 20e6, 5e6
 
 
-def first_break(sh_min: float, size: float, wet: bool) -> float:
-    """Cavity pressure of the state located on the first break."""
-    # the whole 1 m plate, four structured rings of the wall size (borehole_plate.toml)
+def borehole_mesh(size: float) -> TaggedMesh:
+    """The whole 1 m plate, four structured rings of the wall ``size`` (borehole_plate.toml)."""
     sizing = MeshSizing(
         size, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
     )
-    tmesh = mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing))
-    solid = CDEMSolid(
+    return mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing))
+
+
+def borehole_solid(tmesh: TaggedMesh, sh_min: float) -> CDEMSolid:
+    """Seed 001's rock and stresses, springs in r < 6 a, the outer edges fixed."""
+    return CDEMSolid(
         tmesh,
         ElasticMaterial(20e9, 0.25),
         InSituStress(sh_max=SH, sh_min=sh_min, sv=SH),
@@ -43,6 +47,11 @@ def first_break(sh_min: float, size: float, wet: bool) -> float:
         zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
         fixed=tmesh.facet_groups("outer"),
     )
+
+
+def first_break(sh_min: float, size: float, wet: bool) -> float:
+    """Cavity pressure of the state located on the first break."""
+    solid = borehole_solid(borehole_mesh(size), sh_min)
     hf = HydraulicFracture(
         solid,
         Fluid(),

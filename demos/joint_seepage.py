@@ -48,7 +48,7 @@ from hfcdem.cli import parse_with_petsc_options
 from hfcdem.config.scene import load_scene
 from hfcdem.config.units import parse_quantity
 from hfcdem.coupling.condense import cavity_vertices
-from hfcdem.flow.seepage import JointSeepage, joint_network
+from hfcdem.flow.seepage import JointSeepage, joint_network, network_positions
 from hfcdem.io.files import prepare_output_dir, write_atomic, write_csv, write_interfaces
 from hfcdem.io.plots import owned_boundary_triangles, render_facet_series
 from hfcdem.io.series import pvd_text
@@ -110,10 +110,8 @@ def main(argv: list[str] | None = None) -> dict:
     # tenth of the time reached.
 
     # %%
-    index = net.index()
     owned = joints[solid.owned[joints]]
-    keys = np.sort(solid.vertex_ids[owned], axis=1)
-    position = np.asarray([index[tuple(int(v) for v in k)] for k in keys], dtype=np.int64)
+    position = network_positions(solid, net, owned)
     points = solid.vertex_coords[owned]
     rows, frames, panels, titles = [], [], [], []
     t, dt, void = 0.0, 1e-3 * times[0], float(aperture * net.area.sum())

@@ -33,7 +33,7 @@ from mpi4py import MPI
 from hfcdem.config.materials import Fluid
 from hfcdem.coupling.condense import cavity_vertices, mesh_cavity_volume
 from hfcdem.coupling.events import facets_to_break, switch_contacts
-from hfcdem.flow.seepage import JointSeepage, joint_network
+from hfcdem.flow.seepage import JointSeepage, joint_network, network_positions
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.equilibrium import critical_factor
 from hfcdem.solid.forms import Loads, combine
@@ -256,7 +256,7 @@ class _Drive:
         self.solid, self.cavity, self.ramp = solid, cavity, ramp
         self.joints = np.flatnonzero((solid.state == FacetState.INTACT) & ~solid.is_crack)
         self.net = joint_network(solid, cavity_vertices(solid, cavity, None), self.joints)
-        self.local = _network_positions(solid, self.net.index(), self.joints)
+        self.local = network_positions(solid, self.net, self.joints)
         if ramp.filling == "saturation":  # dry joints hold no pressure
             self.seep = JointSeepage(
                 self.net, aperture, fluid, filling="saturation", saturation=0.0
@@ -409,14 +409,6 @@ def _balance_cavity(
         f"cavity balance did not converge in {_BALANCE_ITERATIONS} seepage steps "
         f"(dt = {dt!r} s, residual {r:.3g} m^3 of {volume:.3g}); try a smaller time step"
     )
-
-
-def _network_positions(
-    solid: CDEMSolid, index: dict[tuple[int, ...], int], facets: np.ndarray
-) -> np.ndarray:
-    """Network position of every local facet in ``facets`` (owned or ghost)."""
-    keys = np.sort(solid.vertex_ids[facets], axis=1)
-    return np.asarray([index[tuple(int(v) for v in k)] for k in keys], dtype=np.int64)
 
 
 def _first_facet(

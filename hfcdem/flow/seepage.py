@@ -39,7 +39,6 @@ from hfcdem.solid.cdem import CDEMSolid
 #: initial hydraulic aperture of the intact joints (perforation paper, Table 1), m
 INITIAL_JOINT_APERTURE = 5e-6
 
-
 #: PETSc options prefix of the seepage solve (the command line may override it)
 PREFIX = "hfcdem_seepage_"
 
@@ -54,10 +53,10 @@ FILLING_MODES = ("compressible", "saturation")
 FILLING_TOLERANCE = 1e-12
 
 #: Newton iterations (linear solves) allowed per step before a RuntimeError
+MAX_NEWTON_ITERATIONS = 60
+
 #: relative round-off allowed in a facet's sum of fluxes (1000 machine epsilons)
 _ROUNDOFF = 1e3 * float(np.finfo(float).eps)
-
-MAX_NEWTON_ITERATIONS = 60
 
 #: the derivative of ks enters once the residual is below this fraction of the void
 NEWTON_SWITCH = 1e-2
@@ -86,6 +85,13 @@ def joint_network(
         np.asarray(cavity_vertices, dtype=np.int64),
     )
     return net
+
+
+def network_positions(solid: CDEMSolid, net: Network, facets: np.ndarray) -> np.ndarray:
+    """Position in ``net`` of every local interface in ``facets`` (owned or ghost)."""
+    index = net.index()
+    keys = np.sort(solid.vertex_ids[np.asarray(facets, dtype=np.int64)], axis=1)
+    return np.asarray([index[tuple(int(v) for v in k)] for k in keys], dtype=np.int64)
 
 
 def _finite(name: str, value: float, unit: str) -> float:
@@ -153,6 +159,14 @@ class JointSeepage:
         self._csr, self._diag = _csr(self._pattern, fa, inner, self.transmissibility)
         t = self.transmissibility
         self._pairs = Pairs(fa[inner], fb[inner], t[inner], fa[~inner], t[~inner], n)
+        # sum of each facet's transmissibilities: the scale of its flux round-off
+        self._reach = np.zeros(n)
+        for facets, trans in (
+            (fa[inner], t[inner]),
+            (fb[inner], t[inner]),
+            (fa[~inner], t[~inner]),
+        ):
+            np.add.at(self._reach, facets, trans)
         self._solver: tuple[float, PETSc.KSP] | None = None
         self._fill_solver: PETSc.KSP | None = None  # saturation filling's Newton matrix
         self._injected = 0.0
@@ -274,11 +288,7 @@ class JointSeepage:
         rate = self.storage / dt
         # tolerance: a fraction of the void, or the round-off of the facet's flux sum when
         # that is larger (a long step on full joints: fluxes far above the void)
-        pairs = self._pairs
-        reach = np.zeros(self.net.size)
-        np.add.at(reach, pairs.a, pairs.t)
-        np.add.at(reach, pairs.b, pairs.t)
-        np.add.at(reach, pairs.c, pairs.tc)
+        reach = self._reach
         pmax = max(float(np.abs(old).max()), float(pc.max(initial=0.0)))
         void = self.aperture * self.net.area
         scale = dt / np.maximum(void, _ROUNDOFF * dt * reach * pmax / FILLING_TOLERANCE)
@@ -473,4 +483,5 @@ __all__ = [
     "PREFIX",
     "JointSeepage",
     "joint_network",
+    "network_positions",
 ]

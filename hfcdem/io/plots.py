@@ -247,6 +247,22 @@ def owned_boundary_triangles(tmesh: Any, names: Sequence[str]) -> np.ndarray:
     return mesh.geometry.x[nodes]
 
 
+def _offscreen_pyvista() -> Any:
+    """Return PyVista set to render off screen (an X display started if needed)."""
+    ensure_display()
+    import pyvista
+
+    pyvista.OFF_SCREEN = True
+    return pyvista
+
+
+def _triangles(pyvista: Any, tris: np.ndarray) -> Any:
+    """Return a PolyData of triangles (T, 3, 3), each with its own three points."""
+    pts = tris.reshape(-1, 3)
+    faces = np.column_stack([np.full(len(tris), 3), np.arange(len(pts)).reshape(-1, 3)])
+    return pyvista.PolyData(pts, faces.ravel())
+
+
 def render_fracture_pattern(
     path: str | os.PathLike[str],
     points: np.ndarray,
@@ -268,15 +284,10 @@ def render_fracture_pattern(
         comm.barrier()
         return
     assert parts is not None
-    ensure_display()
-    import pyvista
-
-    pyvista.OFF_SCREEN = True
+    pyvista = _offscreen_pyvista()
 
     def surface(tris: np.ndarray) -> Any:
-        pts = tris.reshape(-1, 3)
-        faces = np.column_stack([np.full(len(tris), 3), np.arange(len(pts)).reshape(-1, 3)])
-        return pyvista.PolyData(pts, faces.ravel())
+        return _triangles(pyvista, tris)
 
     tris = np.concatenate([p for p, _, _ in parts]) if parts else np.zeros((0, 3, 3))
     codes = np.concatenate([s for _, s, _ in parts]) if parts else np.zeros(0)
@@ -334,15 +345,10 @@ def render_facet_series(
         comm.barrier()
         return
     assert parts is not None
-    ensure_display()
-    import pyvista
-
-    pyvista.OFF_SCREEN = True
+    pyvista = _offscreen_pyvista()
 
     def surface(tris: np.ndarray) -> Any:
-        pts = tris.reshape(-1, 3)
-        faces = np.column_stack([np.full(len(tris), 3), np.arange(len(pts)).reshape(-1, 3)])
-        return pyvista.PolyData(pts, faces.ravel())
+        return _triangles(pyvista, tris)
 
     tris = np.concatenate([p for p, _, _ in parts])
     wall = np.concatenate([w for _, _, w in parts])
