@@ -148,6 +148,21 @@ def _run(args: argparse.Namespace) -> int:
             f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
         )
         return 0 if summary["stopped"] is None else 4
+    if summary.get("kind") == "seepage_pumping":
+        fc = summary["first_crack_pressure_MPa"]
+        peak = summary["peak_pressure_MPa"]
+        say(
+            f"{scene.name}: breakdown "
+            + (
+                f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s"
+                if bd
+                else f"not reached (pressure still at its peak {peak:.2f} MPa)"
+            )
+            + (f", first break {fc:.2f} MPa ({summary['first_crack']['mode']})" if fc else "")
+            + f", {summary['tensile_failures']} tensile / {summary['shear_failures']} shear, "
+            f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
+        )
+        return 0 if summary["stopped"] is None else 4
     say(
         f"{scene.name}: breakdown "
         + (f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s" if bd else "not reached")

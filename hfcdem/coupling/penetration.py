@@ -201,7 +201,7 @@ def ramp_breakdown(
         joint_pressure=np.where(np.isin(np.arange(solid.num_facets), joints), p0, 0.0),
     )
     try:
-        initial_failures = _settle(solid, start)
+        initial_failures = settle_excavation(solid, start)
     except CascadeStopped as stop:  # the excavated rock does not stand: no ramp to run
         return RampBreakdown(
             None,
@@ -326,7 +326,7 @@ class _Drive:
         )
 
 
-def _settle(solid: CDEMSolid, loads: Loads, max_iterations: int = 200) -> int:
+def settle_excavation(solid: CDEMSolid, loads: Loads, max_iterations: int = 200) -> int:
     """Break what ``loads`` over-stress, switching contacts, until nothing changes.
 
     As the coupled step does (:func:`hfcdem.coupling.events.switch_contacts`):
@@ -428,4 +428,4 @@ def _first_facet(
     return int(best[0]), np.asarray(best[1:])
 
 
-__all__ = ["PressureRamp", "RampBreakdown", "ramp_breakdown"]
+__all__ = ["CavityPumping", "PressureRamp", "RampBreakdown", "ramp_breakdown", "settle_excavation"]

@@ -1,4 +1,4 @@
-"""A scene run with ``wall_joints = "seepage"``: the pressure ramp to the first break.
+"""A scene run with ``wall_joints = "seepage"``: a pressure ramp, or pumping, with seepage.
 
 The scene's injection must be one linear ramp: ``pressure_rate`` (with
 ``max_pressure`` or ``duration``), or a ``pressure_schedule`` ``[[0 s, P0],
@@ -10,11 +10,16 @@ aperture ``rock.joint_aperture``) and load the solid
 first break: under a rising pressure that is the breakdown (initiation)
 pressure of the classical criteria, Hubbert-Willis when the joints are still
 dry and Haimson-Fairhurst when they stand at the cavity pressure.
-Rate-controlled injection with seepage is not coupled yet.
+
+A constant ``rate`` pumps into the cavity for the scene's ``duration`` and goes
+on past the first break (:func:`hfcdem.coupling.pumping.pump_with_seepage`):
+cracks joined to the cavity take its fluid, the pressure drops as they open,
+and the breakdown is the peak before the drop (``summary.json`` kind
+``"seepage_pumping"``).
 
 Written: ``summary.json``, ``history.csv`` (cavity pressure and fluid in the
 joints per step), ``joints.vtu`` (saturation and pressure of every joint at the
-break, for ParaView) and ``pressure.png``.
+break or the end, and the interface states, for ParaView) and ``pressure.png``.
 """
 
 from __future__ import annotations
@@ -30,6 +35,7 @@ from mpi4py import MPI
 from hfcdem.config.scene import Scene
 from hfcdem.config.tables import SceneError
 from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakdown
+from hfcdem.coupling.pumping import BREAKDOWN_DROP, pump_with_seepage
 from hfcdem.io.files import write_csv, write_interfaces, write_json
 from hfcdem.io.plots import plot_lines
 from hfcdem.solid.cdem import CDEMSolid
@@ -105,6 +111,8 @@ def run_seepage_ramp(
         f"seepage: {what} from {ramp.initial_pressure / 1e6:.4g} MPa, {ramp.steps} steps; "
         f"joints of hydraulic aperture {phys.joint_aperture * 1e6:.3g} um fill from dry"
     )
+    if isinstance(ramp, CavityPumping):
+        return _run_pumped(scene, solid, cavity, ramp, out, say, record)
     result = ramp_breakdown(solid, cavity, phys.fluid, phys.joint_aperture, ramp, progress=say)
     if result.stopped:
         say(f"stopped: {result.stopped}")
@@ -152,7 +160,6 @@ def run_seepage_ramp(
         "wall_joint_pressure_ratio": result.wall_joint_pressure,
         "joint_aperture_m": phys.joint_aperture,
         "pressure_rate_MPa_per_s": ramp.rate / 1e6 if isinstance(ramp, PressureRamp) else None,
-        "pumping_rate_m3_per_s": ramp.rate if isinstance(ramp, CavityPumping) else None,
         "cavity_storage_m3_per_Pa": result.cavity_storage,
         "max_mass_error": result.max_mass_error,
         "steps": result.steps,
@@ -180,6 +187,104 @@ def run_seepage_ramp(
             f"first break {pb / 1e6:.4g} MPa at {result.time:.4g} s "
             f"({summary['first_crack']['mode']}); {result.wet_fraction:.1%} of the joints "
             f"hold pressure, wall joints at {result.wall_joint_pressure:.3f} of the cavity's"
+        )
+    return summary
+
+
+def _run_pumped(
+    scene: Scene,
+    solid: CDEMSolid,
+    cavity: tuple[str, ...],
+    pumping: CavityPumping,
+    out: Path,
+    say: Callable[[str], None],
+    record: Callable[[], dict[str, Any]],
+) -> dict[str, Any]:
+    """Pump for the scene's duration past the first break; write the results into ``out``."""
+    phys, comm = scene.physics, solid.comm
+    result = pump_with_seepage(
+        solid, cavity, phys.fluid, phys.joint_aperture, pumping, progress=say
+    )
+    if result.stopped:
+        say(f"stopped: {result.stopped}")
+    if result.initial_failures:
+        say(f"initial state: {result.initial_failures} interfaces fail before pumping")
+    names = [
+        "time_s",
+        "cavity_pressure_Pa",
+        "fluid_in_joints_m3",
+        "crack_volume_m3",
+        "tensile",
+        "shear",
+        "joints_holding_pressure",
+    ]
+    write_csv(out / "history.csv", names, [list(r) for r in result.history], comm)
+    own = solid.owned
+    zero = np.zeros(solid.num_facets)
+    pj = result.joint_pressure if result.joint_pressure is not None else zero
+    sat = result.saturation if result.saturation is not None else zero
+    write_interfaces(
+        out / "joints.vtu",
+        solid.vertex_coords[own],
+        {"saturation": sat[own], "pressure": pj[own], "state": solid.state[own].astype(float)},
+        comm,
+    )
+    first, pb = result.first_pressure, result.breakdown
+    location = result.first_location
+    summary: dict[str, Any] = {
+        "scene": scene.name,
+        "kind": "seepage_pumping",
+        "breakdown_pressure_MPa": pb / 1e6 if pb is not None else None,
+        "breakdown_time_s": result.breakdown_time,
+        "peak_pressure_MPa": result.peak_pressure / 1e6,
+        "peak_time_s": result.peak_time,
+        "peak_cut_off": result.peak_cut_off,
+        "first_crack_pressure_MPa": first / 1e6 if first is not None else None,
+        "first_crack_time_s": result.first_time,
+        "first_crack": None
+        if location is None
+        else {
+            "point_m": [*map(float, location), *([0.0] * (3 - len(location)))],
+            "mode": _MODES.get(int(result.first_mode or 0), "intact"),
+        },
+        "tensile_failures": result.tensile,
+        "shear_failures": result.shear,
+        "fracture_degree": solid.fracture_degree(),
+        "initial_failures": result.initial_failures,
+        "joints_holding_pressure": result.history[-1][6] if result.history else 0.0,
+        "joint_aperture_m": phys.joint_aperture,
+        "pumping_rate_m3_per_s": pumping.rate,
+        "max_mass_error": result.max_mass_error,
+        "steps": result.steps,
+        "stopped": result.stopped,
+    } | record()
+    write_json(out / "summary.json", summary, comm)
+    if comm.rank == 0 and result.history:
+        h = np.array(result.history)
+        times = np.concatenate([[0.0], h[:, 0]])
+        pressures = np.concatenate([[pumping.initial_pressure], h[:, 1]]) / 1e6
+        curves = [(times, pressures, "cavity pressure", "-")]
+        if first is not None and result.first_time is not None:
+            label = f"first break {first / 1e6:.2f} MPa"
+            curves.append((np.array([result.first_time]), np.array([first / 1e6]), label, "^"))
+        if pb is not None and result.breakdown_time is not None:
+            label = f"breakdown {pb / 1e6:.2f} MPa"
+            curves.append((np.array([result.breakdown_time]), np.array([pb / 1e6]), label, "rv"))
+        plot_lines(
+            out / "pressure.png", curves, "time (s)", "pressure (MPa)", scene.name, MPI.COMM_SELF
+        )
+    comm.barrier()
+    if first is not None:
+        say(
+            f"first break {first / 1e6:.4g} MPa at {result.first_time:.4g} s "
+            f"({summary['first_crack']['mode']})"
+        )
+    if pb is not None:
+        say(f"breakdown {pb / 1e6:.4g} MPa at {result.breakdown_time:.4g} s")
+    else:
+        say(
+            f"no breakdown: the pressure did not fall {BREAKDOWN_DROP:.0%} below its peak "
+            f"{result.peak_pressure / 1e6:.4g} MPa (at {result.peak_time:.4g} s) before the end"
         )
     return summary
 

@@ -1,0 +1,515 @@
+"""Pumping into a cavity past the first break: seepage in the joints, fluid in the cracks.
+
+Fluid is pumped at a constant rate into the cavity (wellbore and tunnels).
+The intact joints of the fracturable zone take it by the seepage of
+:mod:`hfcdem.flow.seepage` (dry at the start, saturation filling) and their
+pressure loads both faces, so they fail on effective stress.  A broken
+interface joined to the cavity through broken ones belongs to the cavity: its
+fluid stands at the cavity pressure (the "uniform" rung of the fidelity
+ladder) and its opening adds to the cavity's volume.  Broken interfaces not
+joined to it stay in the seepage network with the joints' aperture.
+
+Each step finds the cavity pressure ``P`` that holds the fluid pumped so far::
+
+    V(P) (1 + P / Kw) + J(P) = M0 + Q t
+
+``V`` is the cavity's volume (mesh, wall motion and crack openings), linear
+in ``P`` at fixed interface states (its slope from a unit solve); ``J`` the
+joints' content after a trial seepage step at ``P`` (a bracketed secant).
+The solid is then solved at ``P`` with the joint pressures and ``V``
+measured; the balance is repeated until the measured volume is the balanced
+one, so the fluid is conserved at the solved state (the joint pressures'
+pull on the walls is the only lag, and it is iterated out).  Contacts switch
+and interfaces break as in the coupled step, each change followed by a new
+balance in the same step, so the pressure drops as a crack joined to the
+cavity opens.  A step in which an interface would cross its envelope is
+shortened to the crossing (the loads interpolated linearly within it).
+
+The breakdown is the peak cavity pressure, counted only when the pressure
+falls below it by :data:`BREAKDOWN_DROP` before the run ends (a peak cut off
+by the end of the run is flagged, not published).  The first break is
+reported separately: in 3D it is often a shear breakout at the tunnel wall
+that takes no fluid and leaves the pressure rising.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import dolfinx
+import numpy as np
+import ufl
+from mpi4py import MPI
+
+from hfcdem.config.materials import Fluid
+from hfcdem.coupling.condense import cavity_vertices, mesh_cavity_volume
+from hfcdem.coupling.events import facets_to_break, switch_contacts
+from hfcdem.coupling.groups import local_network
+from hfcdem.coupling.penetration import CavityPumping, settle_excavation
+from hfcdem.flow.network import Network, gather_rows
+from hfcdem.flow.seepage import JointSeepage, joint_network, network_positions
+from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solid.equilibrium import critical_factor
+from hfcdem.solid.forms import Loads
+from hfcdem.solid.interfaces import FacetState
+from hfcdem.solid.states import OPEN, CascadeStopped
+
+#: a peak counts as the breakdown once the pressure has fallen this fraction below it
+BREAKDOWN_DROP = 0.01
+
+#: the measured cavity volume must match the balanced one to this fraction of a step's volume
+_VOLUME_TOLERANCE = 1e-8
+
+#: a step whose first crossing lies before this fraction of it is not shortened
+_MIN_FRACTION = 1e-3
+
+#: a shortened step ends this fraction of itself past the crossing, so the facet breaks in it
+_PAST = 1e-6
+
+#: shortenings of one step to land on a crossing
+_MAX_LANDINGS = 3
+
+
+@dataclass(frozen=True)
+class PumpingResult:
+    """What a pumped run with seepage found.
+
+    ``first_pressure``, ``first_time``, ``first_mode`` (1 tensile, 2 shear),
+    ``first_location``: the first interface to break during pumping (None:
+    none broke); ``breakdown``, ``breakdown_time``: the peak cavity pressure
+    once the pressure has fallen below it (None: no such peak);
+    ``peak_pressure``, ``peak_time``: the highest pressure of the run, and
+    ``peak_cut_off``: it came at the end of the run (no fall after it);
+    ``history`` rows: ``(time, cavity pressure, fluid in the joints, crack
+    volume joined to the cavity, tensile, shear, share of joints holding
+    pressure)``; ``max_mass_error``: the largest ``|pumped - held|`` over the
+    pumped volume at a step's solved state; ``joint_pressure`` and
+    ``saturation`` per local facet of the solid at the end (the cracks joined
+    to the cavity at its pressure, saturation 1).
+    """
+
+    first_pressure: float | None
+    first_time: float | None
+    first_mode: int | None
+    first_location: np.ndarray | None
+    breakdown: float | None
+    breakdown_time: float | None
+    peak_pressure: float
+    peak_time: float
+    peak_cut_off: bool
+    initial_failures: int
+    steps: int
+    history: list[tuple[float, ...]] = field(default_factory=list)
+    max_mass_error: float = 0.0
+    joint_pressure: np.ndarray | None = None
+    saturation: np.ndarray | None = None
+    tensile: int = 0
+    shear: int = 0
+    stopped: str | None = None
+
+
+def pump_with_seepage(
+    solid: CDEMSolid,
+    cavity: Sequence[str],
+    fluid: Fluid,
+    aperture: float,
+    pumping: CavityPumping,
+    progress: Callable[[str], None] | None = None,
+    max_state_iterations: int = 200,
+) -> PumpingResult:
+    """Pump into the ``cavity`` facet groups and follow breaks and pressure (collective).
+
+    ``solid`` in the full mode; ``aperture``: hydraulic aperture of the joints
+    (m).  Runs for ``pumping.duration`` in ``pumping.steps`` steps (more where
+    a step is shortened onto a break).
+    """
+    if solid.mode != "full":
+        raise ValueError("pump_with_seepage needs CDEMSolid(mode='full') (pressure on glued faces)")
+    if not (math.isfinite(aperture) and aperture > 0.0):
+        raise ValueError(f"aperture must be a joint aperture > 0 m, got {aperture!r}")
+    for name in cavity:
+        solid.tmesh.facet_tag(name)  # clear error for unknown groups
+    start = Loads(cavity={name: pumping.initial_pressure for name in cavity})
+    try:
+        initial_failures = settle_excavation(solid, start)
+    except CascadeStopped as stop:
+        p0 = pumping.initial_pressure
+        return PumpingResult(
+            None, None, None, None, None, None, p0, 0.0, True, stop.broken, 0,
+            stopped=f"the excavated rock fails before pumping: {stop}",
+        )  # fmt: skip
+    run = _PumpedCavity(solid, tuple(cavity), fluid, aperture, pumping)
+    try:
+        return run.run(initial_failures, progress, max_state_iterations)
+    finally:
+        run.seep.destroy()
+
+
+class _PumpedCavity:
+    """The cavity, its cracks and the joints' seepage, stepped together."""
+
+    def __init__(
+        self,
+        solid: CDEMSolid,
+        cavity: tuple[str, ...],
+        fluid: Fluid,
+        aperture: float,
+        pumping: CavityPumping,
+    ) -> None:
+        self.solid, self.cavity, self.fluid = solid, cavity, fluid
+        self.aperture, self.pumping = aperture, pumping
+        self.kw = fluid.bulk_modulus
+        self.walls = cavity_vertices(solid, cavity, None)
+        self.v_mesh = mesh_cavity_volume(solid, cavity) + pumping.extra_volume
+        n = ufl.FacetNormal(solid.mesh)
+        ds = solid.tmesh.ds
+        self._wall_forms = [
+            dolfinx.fem.form(sum(-ufl.dot(u, n) * ds(name) for name in cavity))
+            for u in (solid.u, solid.u_unit)
+        ]
+        self.cracks = self._joined_cracks()
+        self.facets, self.net, self.positions, self.seep = self._network(None, None)
+        self.p = pumping.initial_pressure
+        loads = self.loads(self.p, self.seep.pressure)
+        solid.solve(loads, self.unit_loads())
+        self.wall_ref = self._wall(0)
+        self.slope = self._slope()
+        self.volume = self._volume(loads)  # at self.p
+        self.m0 = self.volume * (1.0 + self.p / self.kw) + self.joint_content()
+        self.worst = 0.0
+
+    # ------------------------------------------------------------- network
+
+    def _joined_cracks(self) -> np.ndarray:
+        """Per local facet: broken and joined to the cavity through broken facets."""
+        local = local_network(self.solid, self.walls)
+        out = np.zeros(self.solid.num_facets, dtype=bool)
+        out[local.view.facets] = local.joined[local.view.positions]
+        return out
+
+    def _network(
+        self, old: Network | None, old_q: np.ndarray | None
+    ) -> tuple[np.ndarray, Network, np.ndarray, JointSeepage]:
+        """Seepage on every facet not joined to the cavity; fluid carried over by facet.
+
+        Returns the local facets in the network, the network, their positions
+        in it and its seepage.
+        """
+        solid = self.solid
+        mine = self.cracks & solid.owned
+        crack_vertices = gather_rows(solid.comm, solid.vertex_ids[mine].reshape(-1))
+        boundary = np.union1d(self.walls, crack_vertices)
+        facets = np.flatnonzero(~self.cracks)
+        net = joint_network(solid, boundary, facets)
+        q = np.full(net.size, -self.kw)  # dry
+        if old is not None and old_q is not None:
+            index = old.index()
+            for i, key in enumerate(net.keys):
+                j = index.get(tuple(int(v) for v in key))
+                if j is not None:
+                    q[i] = old_q[j]
+        sat = np.clip(np.where(q < 0.0, 1.0 + q / self.kw, 1.0), 0.0, 1.0)
+        seep = JointSeepage(
+            net,
+            self.aperture,
+            self.fluid,
+            pressure=np.maximum(q, 0.0),
+            filling="saturation",
+            saturation=sat,
+        )
+        return facets, net, network_positions(solid, net, facets), seep
+
+    def joint_content(self) -> float:
+        """Fluid in the seepage network (m^3 at zero pressure)."""
+        return float(self.seep.content.sum())
+
+    def per_facet(self, values: np.ndarray) -> np.ndarray:
+        """Network values on the solid's local facets (0 on the cracks joined to the cavity)."""
+        out = np.zeros(self.solid.num_facets)
+        out[self.facets] = values[self.positions]
+        return out
+
+    # ------------------------------------------------------------- solid
+
+    def loads(self, p: float, pj: np.ndarray, in_situ: float = 1.0) -> Loads:
+        """Cavity and joined cracks at ``p``; the network's pressures ``pj`` elsewhere."""
+        pf = self.per_facet(pj)
+        intact = self.solid.state == FacetState.INTACT
+        return Loads(
+            cavity={name: p for name in self.cavity},
+            crack_pressure=np.where(self.cracks, p, np.where(intact, 0.0, pf)),
+            joint_pressure=np.where(intact, pf, 0.0),
+            in_situ_factor=in_situ,
+        )
+
+    def unit_loads(self) -> Loads:
+        """Return a unit pressure in the cavity and its joined cracks, nothing else."""
+        return Loads(
+            cavity={name: 1.0 for name in self.cavity},
+            crack_pressure=self.cracks.astype(float),
+            in_situ_factor=0.0,
+        )
+
+    def _wall(self, which: int) -> float:
+        local = dolfinx.fem.assemble_scalar(self._wall_forms[which])
+        return float(self.solid.comm.allreduce(local, op=MPI.SUM))
+
+    def _crack_mask(self) -> np.ndarray:
+        solid = self.solid
+        return self.cracks & solid.owned & (solid.contact == OPEN)
+
+    def _volume(self, loads: Loads) -> float:
+        """Cavity volume at the solved state (m^3; per metre in 2D) (collective)."""
+        solid = self.solid
+        mask = self._crack_mask()
+        opening = solid.snapshot(loads).opening if mask.any() else np.zeros(solid.num_facets)
+        cracks = float(np.sum(solid.areas[mask] * opening[mask]))
+        cracks = float(solid.comm.allreduce(cracks, op=MPI.SUM))
+        return self.v_mesh + self._wall(0) - self.wall_ref + cracks
+
+    def crack_volume(self, loads: Loads) -> float:
+        """Volume of the open cracks joined to the cavity (collective)."""
+        return self._volume(loads) - self.v_mesh - self._wall(0) + self.wall_ref
+
+    def _slope(self) -> float:
+        """``dV/dP`` of the cavity from the unit solution in ``u_unit`` (collective)."""
+        solid = self.solid
+        mask = self._crack_mask()
+        jump = solid.jumps(solid.u_unit)
+        w = -np.einsum("fi,fi->f", jump, solid.normals) + 1.0 / solid.kn
+        cracks = float(np.sum(solid.areas[mask] * w[mask]))
+        return self._wall(1) + float(solid.comm.allreduce(cracks, op=MPI.SUM))
+
+    def resolve(self, loads: Loads) -> None:
+        """Solve at ``loads`` after a state change: new volume and slope."""
+        self.solid.solve(loads, self.unit_loads())
+        self.slope = self._slope()
+        self.volume = self._volume(loads)
+
+    # ------------------------------------------------------------- balance
+
+    def balance(self, dt: float, target: float, saved: np.ndarray) -> float:
+        """Cavity pressure that holds ``target`` fluid; steps the seepage there."""
+        v0, p0, slope, kw, seep = self.volume, self.p, self.slope, self.kw, self.seep
+
+        def residual(p: float) -> float:
+            seep.restore(saved)
+            seep.step(dt, p)
+            held = (v0 + slope * (p - p0)) * (1.0 + p / kw) + float(seep.content.sum())
+            return held - target
+
+        tol = _VOLUME_TOLERANCE * self.pumping.rate * dt
+        stiffness = max(slope + v0 / kw, 1e-300)
+        r0 = residual(p0)
+        if abs(r0) <= tol:
+            return p0
+        if r0 < 0.0:
+            lo, r_lo = p0, r0
+            hi = p0 - 1.01 * r0 / stiffness
+            r_hi = residual(hi)
+            while r_hi < 0.0:  # the joints take more than the cavity's storage says
+                lo, r_lo, hi = hi, r_hi, hi + 2.0 * (hi - p0)
+                r_hi = residual(hi)
+        else:
+            hi, r_hi = p0, r0
+            lo = max(p0 - 1.01 * r0 / stiffness, 0.0)
+            r_lo = residual(lo)
+            while r_lo > 0.0 and lo > 0.0:
+                hi, r_hi, lo = lo, r_lo, max(lo - 2.0 * (p0 - lo), 0.0)
+                r_lo = residual(lo)
+            if r_lo > 0.0:
+                raise _Dry(f"the cavity runs dry (holds {r_lo:.3g} m^3 more than pumped at 0 Pa)")
+        p, side = lo, 0
+        for _ in range(80):
+            p = (lo * r_hi - hi * r_lo) / (r_hi - r_lo) if r_hi != r_lo else 0.5 * (lo + hi)
+            r = residual(p)
+            if abs(r) <= tol or hi - lo <= 1e-13 * max(abs(hi), 1.0):
+                return p
+            if r > 0.0:
+                hi, r_hi = p, r
+                r_lo = 0.5 * r_lo if side == 1 else r_lo
+                side = 1
+            else:
+                lo, r_lo = p, r
+                r_hi = 0.5 * r_hi if side == -1 else r_hi
+                side = -1
+        raise _Dry(f"the cavity balance did not converge (dt {dt:.3g} s); use more steps")
+
+    # ------------------------------------------------------------- stepping
+
+    def step(
+        self, t: float, dt: float, max_iterations: int
+    ) -> tuple[float, int, tuple | None, float]:
+        """Advance from ``t`` by ``dt`` or less.
+
+        Returns the step taken, the facets broken, the first break ``(cavity
+        pressure, mode, location)`` of the most over-stressed facet when the
+        step's first facets break (or None), and the highest cavity pressure of
+        the step's states (the one at which the first facets break, before the
+        pressure drops).
+        """
+        solid = self.solid
+        target = self.m0 + self.pumping.rate * (t + dt)
+        start_net, start_q = self.net, self.seep.save()
+        start_p, start_pj = self.p, self.seep.pressure
+        start_volume, start_slope = self.volume, self.slope
+        start_loads = self.loads(start_p, start_pj)
+        u_start = solid.u.x.array.copy()
+        saved, landings, broken, rounds, first, top = start_q, 0, 0, 0, None, -math.inf
+        for _ in range(max_iterations):
+            p = self.balance(dt, target, saved)
+            loads = self.loads(p, self.seep.pressure)
+            predicted = self.volume + self.slope * (p - self.p)
+            solid.solve(loads)
+            self.volume, self.p = self._volume(loads), p
+            if abs(self.volume - predicted) * (1.0 + p / self.kw) > (
+                _VOLUME_TOLERANCE * self.pumping.rate * dt
+            ):
+                continue  # the joints moved the walls: balance again on the measured volume
+            if broken == 0 and rounds == 0 and landings < _MAX_LANDINGS:
+                s = self._crossing(start_loads, loads, u_start)
+                if _MIN_FRACTION < s < 1.0:  # land just past the crossing: shorter step
+                    dt, landings = min(s * (1.0 + _PAST), 1.0) * dt, landings + 1
+                    target = self.m0 + self.pumping.rate * (t + dt)
+                    self.seep.restore(saved)
+                    self.p, self.volume, self.slope = start_p, start_volume, start_slope
+                    solid.u.x.array[:] = u_start
+                    continue
+            top = max(top, p)
+            if switch_contacts(solid, loads, only_closing=rounds >= 1):
+                rounds += 1
+                self.resolve(loads)
+                continue
+            ratio, mode = solid.overstress(loads)
+            chosen = facets_to_break(solid, ratio, None)
+            count = int(solid.comm.allreduce(len(chosen), op=MPI.SUM))
+            if count == 0:
+                return dt, broken, first, top
+            if first is None:
+                first = (p, *_worst_facet(solid, ratio, mode))
+            solid.break_facets(chosen, mode[chosen], t + dt)
+            broken, rounds = broken + count, 0
+            cracks = self._joined_cracks()
+            if solid.comm.allreduce(not np.array_equal(cracks, self.cracks), op=MPI.LOR):
+                self.cracks = cracks
+                # the joints' fluid at the step's start, on the network without the new cracks
+                old = self.seep
+                self.facets, self.net, self.positions, self.seep = self._network(start_net, start_q)
+                old.destroy()
+                saved = self.seep.save()
+                start_net, start_q = self.net, saved
+            self.resolve(self.loads(p, self.seep.pressure))
+        raise _Dry(
+            f"interface states did not settle in {max_iterations} iterations at t = {t + dt:.6g} s"
+        )
+
+    def _crossing(self, start: Loads, end: Loads, u_start: np.ndarray) -> float:
+        """Fraction of the step at which an intact facet first fails (inf: none)."""
+        solid = self.solid
+        u_end = solid.u.x.array.copy()
+        solid.u_unit.x.array[:] = u_end - u_start
+        solid.u.x.array[:] = u_start
+        diff = Loads(
+            cavity={k: end.cavity[k] - start.cavity[k] for k in self.cavity},
+            crack_pressure=np.asarray(end.crack_pressure) - np.asarray(start.crack_pressure),
+            joint_pressure=np.asarray(end.joint_pressure) - np.asarray(start.joint_pressure),
+            in_situ_factor=0.0,
+        )
+        crit = critical_factor(solid, start, diff, 0.0, 1.0, 8)
+        solid.u.x.array[:] = u_end
+        solid.u_unit.x.array[:] = 0.0  # not the unit solution any more: slope kept from before
+        return float(solid.comm.allreduce(float(crit.min()) if crit.size else math.inf, MPI.MIN))
+
+    def run(
+        self,
+        initial_failures: int,
+        progress: Callable[[str], None] | None,
+        max_iterations: int,
+    ) -> PumpingResult:
+        """Pump for the whole duration; return the result."""
+        solid, pumping = self.solid, self.pumping
+        t, n = 0.0, 0
+        history: list[tuple[float, ...]] = []
+        first: tuple[float, float, int, np.ndarray] | None = None
+        peak, peak_time, stopped = self.p, 0.0, None
+        breakdown: tuple[float, float] | None = None
+        every = max(1, pumping.steps // 10)
+        while t < pumping.duration * (1.0 - 1e-12):
+            dt = min(pumping.dt, pumping.duration - t)
+            try:
+                dt, broken, worst, top = self.step(t, dt, max_iterations)
+            except _Dry as stop:
+                stopped = str(stop)
+                break
+            t, n = t + dt, n + 1
+            if worst is not None and first is None:
+                first = (worst[0], t, worst[1], worst[2])
+            loads = self.loads(self.p, self.seep.pressure)
+            held = self.volume * (1.0 + self.p / self.kw) + self.joint_content()
+            error = abs(held - self.m0 - pumping.rate * t) / (pumping.rate * t)
+            self.worst = max(self.worst, error)
+            counts = solid.broken_counts()
+            pj = self.seep.pressure
+            wet = float(np.mean(pj > 0.0)) if pj.size else 0.0
+            crack = self.crack_volume(loads)
+            history.append(
+                (t, self.p, self.joint_content(), crack, counts["tensile"], counts["shear"], wet)
+            )
+            if top > peak:
+                peak, peak_time = top, t
+            elif breakdown is None and self.p < peak * (1.0 - BREAKDOWN_DROP):
+                breakdown = (peak, peak_time)
+            if progress is not None and (n % every == 0 or broken):
+                progress(
+                    f"  t {t:.4g} s, cavity {self.p / 1e6:.4g} MPa, {counts['tensile']} tensile "
+                    f"{counts['shear']} shear, joints holding pressure {wet:.1%}, "
+                    f"cracks joined to the cavity {crack:.3g} m^3"
+                )
+        counts = solid.broken_counts()
+        sat = self.per_facet(self.seep.saturation)
+        sat[self.cracks] = 1.0
+        pj = self.per_facet(self.seep.pressure)
+        pj[self.cracks] = self.p
+        return PumpingResult(
+            first_pressure=None if first is None else first[0],
+            first_time=None if first is None else first[1],
+            first_mode=None if first is None else int(first[2]),
+            first_location=None if first is None else first[3],
+            breakdown=None if breakdown is None else breakdown[0],
+            breakdown_time=None if breakdown is None else breakdown[1],
+            peak_pressure=peak,
+            peak_time=peak_time,
+            peak_cut_off=breakdown is None,
+            initial_failures=initial_failures,
+            steps=n,
+            history=history,
+            max_mass_error=self.worst,
+            joint_pressure=pj,
+            saturation=sat,
+            tensile=counts["tensile"],
+            shear=counts["shear"],
+            stopped=stopped,
+        )
+
+
+class _Dry(RuntimeError):
+    """A pumped step that cannot go on (the message says why)."""
+
+
+def _worst_facet(solid: CDEMSolid, ratio: np.ndarray, mode: np.ndarray) -> tuple[int, np.ndarray]:
+    """Mode and midpoint of the most over-stressed facet (the same on every rank)."""
+    mine = (-math.inf, 0, np.zeros(solid.gdim))
+    if ratio.size and float(ratio.max()) >= 1.0:
+        f = int(np.argmax(ratio))
+        mine = (float(ratio[f]), int(mode[f]), solid.midpoints[f, : solid.gdim].copy())
+    # ties (symmetric facets) go to the lowest midpoint, whatever the number of ranks
+    best = max(
+        solid.comm.allgather(mine),
+        key=lambda item: (round(item[0], 12), *(-float(x) for x in item[2])),
+    )
+    return best[1], np.asarray(best[2])
+
+
+__all__ = ["BREAKDOWN_DROP", "PumpingResult", "pump_with_seepage"]

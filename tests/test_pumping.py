@@ -1,0 +1,127 @@
+"""Pumping into a borehole past the first break, the joints taking fluid by seepage.
+
+Seed 001's borehole at a/5 (the mesh and rock of ``test_penetration``).  A
+sealed cavity (joints of 1 nm) breaks at the dry first break of the linear ramp
+and its pressure then falls as the crack joined to the cavity opens: the
+breakdown is that peak.  With 5 um joints and a viscous fluid, slow pumping
+lets the joints fill and the wall break lower; the breakdown rises with the
+rate.  Pumped = held in the cavity, its cracks and the joints, every step.
+"""
+
+import math
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
+from hfcdem.config.parts import MeshSizing, Plate, Wellbore
+from hfcdem.config.plates import BoreholeSquare
+from hfcdem.coupling.penetration import CavityPumping
+from hfcdem.coupling.pumping import BREAKDOWN_DROP, pump_with_seepage
+from hfcdem.mesh.build import mesh_geometry
+from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solid.forms import Loads
+from hfcdem.solid.interfaces import FacetState
+
+A, SH, SHMIN, T0 = 0.03, 20e6, 12e6, 5e6
+WALL = ("wellbore_wall",)
+Q = 2e-6  # m^2/s per metre of borehole (seed 001)
+
+
+def _plate(comm=MPI.COMM_WORLD):
+    sizing = MeshSizing(
+        A / 5, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
+    )
+    return mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing), comm=comm)
+
+
+@pytest.fixture(scope="module")
+def plate():
+    return _plate()
+
+
+def _solid(tmesh, mode="full") -> CDEMSolid:
+    return CDEMSolid(
+        tmesh,
+        ElasticMaterial(20e9, 0.25),
+        InSituStress(sh_max=SH, sh_min=SHMIN, sv=SH),
+        InterfaceModel(
+            alpha=100, tensile_strength=T0, cohesion=60e6, friction_angle=30, break_rule="all"
+        ),
+        zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
+        fixed=tmesh.facet_groups("outer"),
+        mode=mode,
+    )
+
+
+def _pump(tmesh, aperture, rate=Q, duration=None, steps=100):
+    from hfcdem.config.materials import Fluid
+
+    duration = 40.0 * Q / rate if duration is None else duration
+    pumping = CavityPumping(rate, duration, steps=steps)
+    return pump_with_seepage(_solid(tmesh), WALL, Fluid(viscosity=1.0), aperture, pumping)
+
+
+def test_sealed_cavity_breaks_down_at_the_dry_first_break(plate):
+    solid = _solid(plate)
+    unit = Loads(cavity={WALL[0]: 1.0}, in_situ_factor=0.0)
+    dry = solid.ramp(Loads(cavity={WALL[0]: 0.0}), unit, 40e6)
+    run = _pump(plate, 1e-9)
+    # the step is shortened onto the crossing (1e-6 of the step past it, the step's
+    # 0.49 MPa: 3.4e-8 of the pressure): the break lands on the linear ramp's value
+    assert run.first_pressure == pytest.approx(dry, rel=4e-8)
+    assert run.first_pressure >= dry
+    assert run.breakdown == run.first_pressure and not run.peak_cut_off
+    assert run.first_mode == FacetState.TENSILE
+    assert abs(run.first_location[1]) < 1e-9 and abs(abs(run.first_location[0]) - A) < A / 5
+    t, p, _, crack, tensile, _, _ = np.array(run.history).T
+    after = t >= run.breakdown_time  # the step that breaks ends with the crack open
+    # the crack joined to the cavity takes fluid: the pressure falls, then rises again as
+    # the crack stops at the edge of the fracturable zone
+    assert p[after].min() < run.breakdown * (1.0 - BREAKDOWN_DROP)
+    assert crack[~after].max() < 1e-12 < crack[after].min()
+    assert tensile[-1] >= 10 and run.shear == 0
+    assert run.max_mass_error < 1e-9
+
+
+def test_faster_pumping_breaks_down_higher(plate):
+    slow, fast = (_pump(plate, 5e-6, rate) for rate in (Q, 10 * Q))
+    assert slow.breakdown is not None and fast.breakdown is not None
+    assert slow.breakdown < fast.breakdown
+    # slow: the joints at the wall hold fluid when it breaks, and it breaks below the dry
+    # 14.43 MPa; fast: they are nearly dry
+    assert slow.first_pressure < 0.75 * fast.first_pressure
+    assert slow.history[-1][6] > fast.history[-1][6]
+    assert max(slow.max_mass_error, fast.max_mass_error) < 1e-9
+
+
+def test_a_run_that_ends_on_a_rising_pressure_has_no_breakdown(plate):
+    run = _pump(plate, 1e-9, duration=8.0, steps=20)
+    assert run.breakdown is None and run.peak_cut_off and run.first_pressure is None
+    assert run.peak_pressure == pytest.approx(run.history[-1][1], rel=1e-12)
+    assert run.peak_time == pytest.approx(8.0)
+
+
+@pytest.mark.mpi
+def test_ranks_agree(plate):
+    world = _pump(plate, 5e-6, 10 * Q, steps=60)
+    alone = _pump(_plate(MPI.COMM_SELF), 5e-6, 10 * Q, steps=60)
+    assert world.breakdown == pytest.approx(alone.breakdown, rel=1e-8)
+    assert world.first_pressure == pytest.approx(alone.first_pressure, rel=1e-8)
+    assert (world.tensile, world.shear) == (alone.tensile, alone.shear)
+    assert np.allclose(world.first_location, alone.first_location, atol=1e-12)
+
+
+def test_bad_input(plate):
+    from hfcdem.config.materials import Fluid
+
+    pumping = CavityPumping(Q, 1.0, steps=2)
+    with pytest.raises(ValueError, match="mode='full'"):
+        pump_with_seepage(_solid(plate, "reduced"), WALL, Fluid(), 5e-6, pumping)
+    with pytest.raises(ValueError, match="aperture"):
+        pump_with_seepage(_solid(plate), WALL, Fluid(), 0.0, pumping)
+    with pytest.raises(ValueError, match="aperture"):
+        pump_with_seepage(_solid(plate), WALL, Fluid(), math.nan, pumping)
+    with pytest.raises(KeyError, match="no_such_group"):
+        pump_with_seepage(_solid(plate), ("no_such_group",), Fluid(), 5e-6, pumping)
