@@ -14,43 +14,27 @@ import math
 
 import numpy as np
 import pytest
+from borehole import SH, SHMIN, T0, WALL, A, borehole_plate, borehole_solid
 from mpi4py import MPI
 
 from hfcdem.config.materials import ElasticMaterial, Fluid, InSituStress, InterfaceModel
-from hfcdem.config.parts import MeshSizing, Plate, Wellbore
-from hfcdem.config.plates import BoreholeSquare
 from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakdown
-from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import CascadeStopped
 
-A, SH, SHMIN, T0 = 0.03, 20e6, 12e6, 5e6
-WALL = ("wellbore_wall",)
 FLUID = Fluid(viscosity=1.0)
 APERTURE = 5e-6
 
 
 @pytest.fixture(scope="module")
 def plate():
-    sizing = MeshSizing(
-        A / 5, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
-    )
-    return mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing))
+    return borehole_plate()
 
 
 def _solid(tmesh) -> CDEMSolid:
-    return CDEMSolid(
-        tmesh,
-        ElasticMaterial(20e9, 0.25),
-        InSituStress(sh_max=SH, sh_min=SHMIN, sv=SH),
-        InterfaceModel(
-            alpha=100, tensile_strength=T0, cohesion=60e6, friction_angle=30, break_rule="all"
-        ),
-        zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
-        fixed=tmesh.facet_groups("outer"),
-    )
+    return borehole_solid(tmesh)
 
 
 def _static_first_break(tmesh, joints_wet: bool) -> float:
@@ -143,13 +127,7 @@ def test_pumping_faster_breaks_higher_and_keeps_the_mass(plate):
 @pytest.mark.mpi
 def test_ranks_agree(plate):
     world = _ramp(plate, 1e6, steps=60)
-    sizing = MeshSizing(
-        A / 5, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
-    )
-    alone = mesh_geometry(
-        BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing), comm=MPI.COMM_SELF
-    )
-    one = _ramp(alone, 1e6, steps=60)
+    one = _ramp(borehole_plate(MPI.COMM_SELF), 1e6, steps=60)
     assert world.pressure == pytest.approx(one.pressure, rel=1e-10)
     assert world.wet_fraction == one.wet_fraction
 

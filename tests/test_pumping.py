@@ -12,52 +12,28 @@ import math
 
 import numpy as np
 import pytest
+from borehole import WALL, A, borehole_plate, borehole_solid
 from mpi4py import MPI
 
-from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
-from hfcdem.config.parts import MeshSizing, Plate, Wellbore
-from hfcdem.config.plates import BoreholeSquare
+from hfcdem.config.materials import Fluid
 from hfcdem.coupling.penetration import CavityPumping
 from hfcdem.coupling.pumping import BREAKDOWN_DROP, pump_with_seepage
-from hfcdem.mesh.build import mesh_geometry
-from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
 from hfcdem.solid.interfaces import FacetState
 
-A, SH, SHMIN, T0 = 0.03, 20e6, 12e6, 5e6
-WALL = ("wellbore_wall",)
 Q = 2e-6  # m^2/s per metre of borehole (seed 001)
-
-
-def _plate(comm=MPI.COMM_WORLD):
-    sizing = MeshSizing(
-        A / 5, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
-    )
-    return mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing), comm=comm)
 
 
 @pytest.fixture(scope="module")
 def plate():
-    return _plate()
+    return borehole_plate()
 
 
-def _solid(tmesh, mode="full") -> CDEMSolid:
-    return CDEMSolid(
-        tmesh,
-        ElasticMaterial(20e9, 0.25),
-        InSituStress(sh_max=SH, sh_min=SHMIN, sv=SH),
-        InterfaceModel(
-            alpha=100, tensile_strength=T0, cohesion=60e6, friction_angle=30, break_rule="all"
-        ),
-        zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
-        fixed=tmesh.facet_groups("outer"),
-        mode=mode,
-    )
+def _solid(tmesh, mode="full"):
+    return borehole_solid(tmesh, mode)
 
 
 def _pump(tmesh, aperture, rate=Q, duration=None, steps=100):
-    from hfcdem.config.materials import Fluid
-
     duration = 40.0 * Q / rate if duration is None else duration
     pumping = CavityPumping(rate, duration, steps=steps)
     return pump_with_seepage(_solid(tmesh), WALL, Fluid(viscosity=1.0), aperture, pumping)
@@ -106,7 +82,7 @@ def test_a_run_that_ends_on_a_rising_pressure_has_no_breakdown(plate):
 @pytest.mark.mpi
 def test_ranks_agree(plate):
     world = _pump(plate, 5e-6, 10 * Q, steps=60)
-    alone = _pump(_plate(MPI.COMM_SELF), 5e-6, 10 * Q, steps=60)
+    alone = _pump(borehole_plate(MPI.COMM_SELF), 5e-6, 10 * Q, steps=60)
     assert world.breakdown == pytest.approx(alone.breakdown, rel=1e-8)
     assert world.first_pressure == pytest.approx(alone.first_pressure, rel=1e-8)
     assert (world.tensile, world.shear) == (alone.tensile, alone.shear)
@@ -114,8 +90,6 @@ def test_ranks_agree(plate):
 
 
 def test_bad_input(plate):
-    from hfcdem.config.materials import Fluid
-
     pumping = CavityPumping(Q, 1.0, steps=2)
     with pytest.raises(ValueError, match="mode='full'"):
         pump_with_seepage(_solid(plate, "reduced"), WALL, Fluid(), 5e-6, pumping)

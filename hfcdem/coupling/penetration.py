@@ -389,12 +389,38 @@ def _balance_cavity(
         r_hi = residual(hi)
     if r_lo > 0.0:  # the joints take more than is pumped: the pressure falls
         lo, r_lo = 0.0, residual(0.0)
-    side = 0
-    for _ in range(_BALANCE_ITERATIONS):
+    p, r, converged = illinois_root(
+        residual, (lo, r_lo), (hi, r_hi), tol, 1e-12, _BALANCE_ITERATIONS
+    )
+    if converged:
+        return p
+    raise RuntimeError(
+        f"cavity balance did not converge in {_BALANCE_ITERATIONS} seepage steps "
+        f"(dt = {dt!r} s, residual {r:.3g} m^3 of {volume:.3g}); try a smaller time step"
+    )
+
+
+def illinois_root(
+    residual: Callable[[float], float],
+    low: tuple[float, float],
+    high: tuple[float, float],
+    tol: float,
+    width: float,
+    iterations: int,
+) -> tuple[float, float, bool]:
+    """Root of an increasing ``residual`` bracketed by ``low`` and ``high`` (Illinois).
+
+    ``low``, ``high``: ``(x, residual(x))`` with the residual <= 0 at ``low``,
+    >= 0 at ``high``.  Stops when ``|r| <= tol`` or the bracket is narrower than
+    ``width`` times ``max(|x_high|, 1)``; returns ``(x, r, converged)``.
+    """
+    (lo, r_lo), (hi, r_hi) = low, high
+    p, r, side = lo, r_lo, 0
+    for _ in range(iterations):
         p = (lo * r_hi - hi * r_lo) / (r_hi - r_lo) if r_hi != r_lo else 0.5 * (lo + hi)
         r = residual(p)
-        if abs(r) <= tol or hi - lo <= 1e-12 * max(abs(hi), 1.0):
-            return p
+        if abs(r) <= tol or hi - lo <= width * max(abs(hi), 1.0):
+            return p, r, True
         if r > 0.0:
             hi, r_hi = p, r
             if side == 1:
@@ -405,10 +431,7 @@ def _balance_cavity(
             if side == -1:
                 r_hi *= 0.5
             side = -1
-    raise RuntimeError(
-        f"cavity balance did not converge in {_BALANCE_ITERATIONS} seepage steps "
-        f"(dt = {dt!r} s, residual {r:.3g} m^3 of {volume:.3g}); try a smaller time step"
-    )
+    return p, r, False
 
 
 def _first_facet(
@@ -428,4 +451,11 @@ def _first_facet(
     return int(best[0]), np.asarray(best[1:])
 
 
-__all__ = ["CavityPumping", "PressureRamp", "RampBreakdown", "ramp_breakdown", "settle_excavation"]
+__all__ = [
+    "CavityPumping",
+    "PressureRamp",
+    "RampBreakdown",
+    "illinois_root",
+    "ramp_breakdown",
+    "settle_excavation",
+]

@@ -47,7 +47,7 @@ from hfcdem.config.materials import Fluid
 from hfcdem.coupling.condense import cavity_vertices, mesh_cavity_volume
 from hfcdem.coupling.events import facets_to_break, switch_contacts
 from hfcdem.coupling.groups import local_network
-from hfcdem.coupling.penetration import CavityPumping, settle_excavation
+from hfcdem.coupling.penetration import CavityPumping, illinois_root, settle_excavation
 from hfcdem.flow.network import Network, gather_rows
 from hfcdem.flow.seepage import JointSeepage, joint_network, network_positions
 from hfcdem.solid.cdem import CDEMSolid
@@ -261,17 +261,17 @@ class _PumpedCavity:
         return self.cracks & solid.owned & (solid.contact == OPEN)
 
     def _volume(self, loads: Loads) -> float:
-        """Cavity volume at the solved state (m^3; per metre in 2D) (collective)."""
+        """Cavity volume at the solved state (m^3; per metre in 2D) (collective).
+
+        Keeps the part of it in the open cracks joined to the cavity in
+        :attr:`crack_volume`.
+        """
         solid = self.solid
         mask = self._crack_mask()
         opening = solid.snapshot(loads).opening if mask.any() else np.zeros(solid.num_facets)
         cracks = float(np.sum(solid.areas[mask] * opening[mask]))
-        cracks = float(solid.comm.allreduce(cracks, op=MPI.SUM))
-        return self.v_mesh + self._wall(0) - self.wall_ref + cracks
-
-    def crack_volume(self, loads: Loads) -> float:
-        """Volume of the open cracks joined to the cavity (collective)."""
-        return self._volume(loads) - self.v_mesh - self._wall(0) + self.wall_ref
+        self.crack_volume = float(solid.comm.allreduce(cracks, op=MPI.SUM))
+        return self.v_mesh + self._wall(0) - self.wall_ref + self.crack_volume
 
     def _slope(self) -> float:
         """``dV/dP`` of the cavity from the unit solution in ``u_unit`` (collective)."""
@@ -321,20 +321,9 @@ class _PumpedCavity:
                 r_lo = residual(lo)
             if r_lo > 0.0:
                 raise _Dry(f"the cavity runs dry (holds {r_lo:.3g} m^3 more than pumped at 0 Pa)")
-        p, side = lo, 0
-        for _ in range(80):
-            p = (lo * r_hi - hi * r_lo) / (r_hi - r_lo) if r_hi != r_lo else 0.5 * (lo + hi)
-            r = residual(p)
-            if abs(r) <= tol or hi - lo <= 1e-13 * max(abs(hi), 1.0):
-                return p
-            if r > 0.0:
-                hi, r_hi = p, r
-                r_lo = 0.5 * r_lo if side == 1 else r_lo
-                side = 1
-            else:
-                lo, r_lo = p, r
-                r_hi = 0.5 * r_hi if side == -1 else r_hi
-                side = -1
+        p, _, converged = illinois_root(residual, (lo, r_lo), (hi, r_hi), tol, 1e-13, 80)
+        if converged:
+            return p
         raise _Dry(f"the cavity balance did not converge (dt {dt:.3g} s); use more steps")
 
     # ------------------------------------------------------------- stepping
@@ -446,14 +435,13 @@ class _PumpedCavity:
             t, n = t + dt, n + 1
             if worst is not None and first is None:
                 first = (worst[0], t, worst[1], worst[2])
-            loads = self.loads(self.p, self.seep.pressure)
             held = self.volume * (1.0 + self.p / self.kw) + self.joint_content()
             error = abs(held - self.m0 - pumping.rate * t) / (pumping.rate * t)
             self.worst = max(self.worst, error)
             counts = solid.broken_counts()
             pj = self.seep.pressure
             wet = float(np.mean(pj > 0.0)) if pj.size else 0.0
-            crack = self.crack_volume(loads)
+            crack = self.crack_volume
             history.append(
                 (t, self.p, self.joint_content(), crack, counts["tensile"], counts["shear"], wet)
             )

@@ -125,16 +125,7 @@ def run_seepage_ramp(
         [[r[0], r[1], r[2], r[3] if math.isfinite(r[3]) else -1.0] for r in rows],
         comm,
     )
-    own = solid.owned
-    zero = np.zeros(solid.num_facets)
-    pj = result.joint_pressure if result.joint_pressure is not None else zero
-    sat = result.saturation if result.saturation is not None else zero
-    write_interfaces(
-        out / "joints.vtu",
-        solid.vertex_coords[own],
-        {"saturation": sat[own], "pressure": pj[own], "state": solid.state[own].astype(float)},
-        comm,
-    )
+    _write_joints(out / "joints.vtu", solid, result.joint_pressure, result.saturation)
     pb = result.pressure
     location = result.location
     summary: dict[str, Any] = {
@@ -144,12 +135,7 @@ def run_seepage_ramp(
         "breakdown_time_s": result.time,
         "first_crack_pressure_MPa": pb / 1e6 if pb is not None else None,
         "first_crack_time_s": result.time,
-        "first_crack": None
-        if location is None
-        else {
-            "point_m": [*map(float, location), *([0.0] * (3 - len(location)))],
-            "mode": _MODES.get(int(result.mode or 0), "intact"),
-        },
+        "first_crack": _first_crack(location, result.mode),
         "peak_pressure_MPa": (
             max((r[1] for r in result.history), default=ramp.initial_pressure) / 1e6
             if pb is None
@@ -191,6 +177,28 @@ def run_seepage_ramp(
     return summary
 
 
+def _write_joints(
+    path: Path, solid: CDEMSolid, pressure: np.ndarray | None, saturation: np.ndarray | None
+) -> None:
+    """Write every owned joint's saturation, pressure and state (per local facet) as VTU."""
+    own = solid.owned
+    zero = np.zeros(solid.num_facets)
+    pj = pressure if pressure is not None else zero
+    sat = saturation if saturation is not None else zero
+    data = {"saturation": sat[own], "pressure": pj[own], "state": solid.state[own].astype(float)}
+    write_interfaces(path, solid.vertex_coords[own], data, solid.comm)
+
+
+def _first_crack(location: np.ndarray | None, mode: int | None) -> dict[str, Any] | None:
+    """Return the summary's first crack: its point in 3D coordinates (m) and its mode."""
+    if location is None:
+        return None
+    return {
+        "point_m": [*map(float, location), *([0.0] * (3 - len(location)))],
+        "mode": _MODES.get(int(mode or 0), "intact"),
+    }
+
+
 def _run_pumped(
     scene: Scene,
     solid: CDEMSolid,
@@ -219,16 +227,7 @@ def _run_pumped(
         "joints_holding_pressure",
     ]
     write_csv(out / "history.csv", names, [list(r) for r in result.history], comm)
-    own = solid.owned
-    zero = np.zeros(solid.num_facets)
-    pj = result.joint_pressure if result.joint_pressure is not None else zero
-    sat = result.saturation if result.saturation is not None else zero
-    write_interfaces(
-        out / "joints.vtu",
-        solid.vertex_coords[own],
-        {"saturation": sat[own], "pressure": pj[own], "state": solid.state[own].astype(float)},
-        comm,
-    )
+    _write_joints(out / "joints.vtu", solid, result.joint_pressure, result.saturation)
     first, pb = result.first_pressure, result.breakdown
     location = result.first_location
     summary: dict[str, Any] = {
@@ -241,12 +240,7 @@ def _run_pumped(
         "peak_cut_off": result.peak_cut_off,
         "first_crack_pressure_MPa": first / 1e6 if first is not None else None,
         "first_crack_time_s": result.first_time,
-        "first_crack": None
-        if location is None
-        else {
-            "point_m": [*map(float, location), *([0.0] * (3 - len(location)))],
-            "mode": _MODES.get(int(result.first_mode or 0), "intact"),
-        },
+        "first_crack": _first_crack(location, result.first_mode),
         "tensile_failures": result.tensile,
         "shear_failures": result.shear,
         "fracture_degree": solid.fracture_degree(),
