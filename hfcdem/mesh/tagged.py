@@ -23,6 +23,8 @@ import ufl
 from dolfinx.io import gmshio
 from mpi4py import MPI
 
+from hfcdem.mesh.partition import create_partitioner
+
 
 class MeshingError(RuntimeError):
     """Gmsh could not build a scene's geometry or mesh."""
@@ -113,7 +115,7 @@ def mesh_from_gmsh(
         raise MeshingError(error)
     cell_names, facet_names = comm.bcast(names, root=0)
     try:
-        partitioner = dolfinx.mesh.create_cell_partitioner(dolfinx.mesh.GhostMode.shared_facet)
+        partitioner = create_partitioner(dolfinx.mesh.GhostMode.shared_facet)
         mesh, cell_tags, facet_tags = gmshio.model_to_mesh(
             gmsh.model, comm, 0, gdim=gdim, partitioner=partitioner
         )
