@@ -19,6 +19,7 @@ from hfcdem.workflows.run import build_solid, run_scene
 from hfcdem.workflows.seepage_ramp import seepage_loading
 
 SCENE = Path(__file__).resolve().parents[1] / "meshes/scenes/borehole_seepage.toml"
+PUMPING = SCENE.with_name("borehole_pumping.toml")
 A = 0.03  # borehole radius
 
 
@@ -127,13 +128,7 @@ def test_rock_that_breaks_whole_on_excavation_is_reported(shared_tmp_path):
 
 
 def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
-    pumped = {f"injection.{k}": None for k in ("pressure_rate", "max_pressure", "pressure_step")}
-    pumped |= {
-        "injection.rate": "2e-6 m3/s",  # seed 001's pumping, per metre
-        "injection.duration": "20 s",
-        "solver.time_step": "0.1 s",
-    }
-    scene = _scene(**pumped)
+    scene = load_scene(PUMPING, "coarse")  # seed 001's 2e-6 m^3/s per metre, 20 s
     loading = seepage_loading(scene)
     assert loading.rate == pytest.approx(2e-6) and loading.steps == 200
     summary = run_scene(scene, shared_tmp_path / "pumped")
@@ -148,4 +143,4 @@ def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
     rows = (shared_tmp_path / "pumped" / "history.csv").read_text().splitlines()
     assert rows[0].startswith("time_s,cavity_pressure_Pa") and len(rows) > 200
     with pytest.raises(SceneError, match=r"injection\.wall_film"):
-        seepage_loading(_scene(**pumped, **{"injection.wall_film": "5 um"}))
+        seepage_loading(load_scene(PUMPING, "coarse", overrides={"injection.wall_film": "5 um"}))
