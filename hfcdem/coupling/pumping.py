@@ -359,7 +359,8 @@ class _PumpedCavity:
                 continue  # the joints moved the walls: balance again on the measured volume
             if broken == 0 and rounds == 0 and landings < _MAX_LANDINGS:
                 s = self._crossing(start_loads, loads, u_start)
-                if _MIN_FRACTION < s < 1.0:  # land just past the crossing: shorter step
+                # land just past the crossing (a landed step finds it at 1 / (1 + _PAST))
+                if _MIN_FRACTION < s and s * (1.0 + _PAST) < 1.0:
                     dt, landings = min(s * (1.0 + _PAST), 1.0) * dt, landings + 1
                     target = self.m0 + self.pumping.rate * (t + dt)
                     self.seep.restore(saved)
