@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from hfcdem.workflows.breakdown import detect_breakdown
+from hfcdem.workflows.breakdown import breakdown_note, detect_breakdown
 
 
 def test_peak_then_sustained_drop():
@@ -28,3 +28,23 @@ def test_bad_arguments():
         detect_breakdown([0, 1], [0, 1], drop_fraction=1.5)
     with pytest.raises(ValueError, match="same length"):
         detect_breakdown([0, 1], [0])
+
+
+def test_propagation_from_an_open_crack_has_no_breakdown():
+    # KGD: from the initial state the first step jumps up, then the pressure only falls
+    t = np.linspace(0, 10, 21)
+    p = np.concatenate([[0.0], 1.2 * (t[1:] / t[1]) ** (-1 / 3)])
+    assert detect_breakdown(t, p) is None
+    assert "open crack" in breakdown_note(p, None, open_crack=True)
+    assert "not resolved" in breakdown_note(p, None, open_crack=False)
+    # a later, higher peak that drops is still found
+    q = np.concatenate([p[:10], [2.0, 3.0, 2.0, 1.5, 1.2, 1.0, 0.9, 0.8, 0.7, 0.6, 0.5]])
+    found = detect_breakdown(t, q)
+    assert found is not None and found.pressure == 3.0 and found.time == t[11]
+
+
+def test_breakdown_note_says_why_there_is_none():
+    t = np.linspace(0, 10, 101)
+    assert breakdown_note(5 * t, None, open_crack=False).startswith("the pressure still rises")
+    found = detect_breakdown(t, np.where(t < 6, 10 * t, 60 - 20 * (t - 6)))
+    assert breakdown_note(np.where(t < 6, 10 * t, 60 - 20 * (t - 6)), found, False) is None

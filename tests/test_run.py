@@ -29,6 +29,12 @@ def test_kgd_strip_scene_runs_and_matches_the_solution(shared_tmp_path):
     header = history[0].split(",")
     last = dict(zip(header, map(float, history[-1].split(",")), strict=True))
     assert last["injection_pressure"] == pytest.approx(ref.net_pressure, rel=0.10)
+    # propagation from an open crack: no breakdown peak (the first step is not one)
+    assert summary["breakdown_pressure_MPa"] is None
+    assert "open crack" in summary["breakdown_note"]
+    # 1 m facets: the front is a whole facet past the solution's 20.63 m (measured +6.6 %)
+    assert summary["fluid_front_m"] == pytest.approx(ref.half_length, rel=0.08)
+    assert summary["inlet_opening_m"] == pytest.approx(ref.inlet_opening, rel=0.04)
     for name in ("run.json", "summary.json", "history.csv", "pressure.png", "fracture.vtu"):
         assert (out / name).stat().st_size > 0, name
     assert (out / "fields.bp").is_dir()

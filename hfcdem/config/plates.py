@@ -148,6 +148,7 @@ class KGDStrip:
     kind: ClassVar[str] = "kgd_strip"
     dim: ClassVar[int] = 2
     injection_point: ClassVar[Vector] = (0.0, 0.0, 0.0)
+    crack_direction: ClassVar[Vector] = (1.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "symmetry", check_symmetry_axes(self.symmetry, ("x", "y")))

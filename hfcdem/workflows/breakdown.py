@@ -6,7 +6,10 @@ stayed below that maximum by at least ``drop_fraction`` of the rise
 ``max - p_start`` for ``hold`` consecutive records (a sustained drop).  The
 breakdown pressure is that running maximum and its time the time of the peak.
 A history that never drops that far for that long has no breakdown (the
-pressure is still rising, or only wobbles).
+pressure is still rising, or only wobbles).  Nor has a history whose peak is
+its first record after the start: the rise to it is not resolved, and a run
+that starts from an open crack (KGD) only propagates, its pressure falling from
+the first step on (:func:`breakdown_note` says which).
 """
 
 from __future__ import annotations
@@ -44,20 +47,46 @@ def detect_breakdown(
     if hold < 1:
         raise ValueError(f"hold must be >= 1 record, got {hold!r}")
     start = p[0]
-    peak, peak_time = p[0], t[0]
+    peak, peak_index = p[0], 0
     below = 0
-    for ti, pi in zip(t[1:], p[1:], strict=True):
-        if pi > peak:
-            peak, peak_time, below = pi, ti, 0
+    for i in range(1, len(p)):
+        if p[i] > peak:
+            peak, peak_index, below = p[i], i, 0
             continue
         rise = peak - start
-        below = below + 1 if rise > 0.0 and peak - pi >= drop_fraction * rise else 0
-        if below >= hold:
-            return Breakdown(pressure=float(peak), time=float(peak_time), confirmed_at=float(ti))
+        below = below + 1 if rise > 0.0 and peak - p[i] >= drop_fraction * rise else 0
+        # a peak on the first record is not confirmed: the rise to it is not resolved
+        if below >= hold and peak_index > 1:
+            return Breakdown(
+                pressure=float(peak), time=float(t[peak_index]), confirmed_at=float(t[i])
+            )
     return None
+
+
+def breakdown_note(
+    pressures: Sequence[float], found: Breakdown | None, open_crack: bool
+) -> str | None:
+    """Say why a history has no breakdown (None when it has one, or nothing to say).
+
+    ``open_crack``: the run started from a pre-existing open crack.
+    """
+    if found is not None or len(pressures) < 3:
+        return None
+    p = np.asarray(pressures, dtype=float)
+    if int(np.argmax(p)) == 1 and p[-1] < p[1]:
+        if open_crack:
+            return (
+                "propagation from an open crack: the pressure falls from the first step, "
+                "no breakdown peak"
+            )
+        return "the pressure is highest at the first step: the peak is not resolved in time"
+    if int(np.argmax(p)) == len(p) - 1:
+        return "the pressure still rises at the end of the run"
+    return "no sustained drop after the peak"
 
 
 __all__ = [
     "Breakdown",
+    "breakdown_note",
     "detect_breakdown",
 ]

@@ -46,7 +46,7 @@ from hfcdem.io.history import HistoryFile
 from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import FieldSeries
 from hfcdem.solid.cdem import CDEMSolid
-from hfcdem.workflows.breakdown import detect_breakdown
+from hfcdem.workflows.breakdown import breakdown_note, detect_breakdown
 from hfcdem.workflows.observers import (
     CheckpointWriter,
     FirstCrack,
@@ -298,6 +298,7 @@ def _run_coupled(
     points, data = frac.facet_fields()
     write_interfaces(out / "fracture.vtu", points, data, comm)
     summary = _summarise(scene, frac, found, pressures, first, stopped) | record()
+    summary |= _inlet_answers(scene, frac)
     write_json(out / "summary.json", summary, comm)
     if comm.rank == 0 and pressures:
         _plot_pressure(out / "pressure.png", times, pressures, found, scene.name)
@@ -322,6 +323,7 @@ def _summarise(
         "scene": scene.name,
         "breakdown_pressure_MPa": found.pressure / 1e6 if found else None,
         "breakdown_time_s": found.time if found else None,
+        "breakdown_note": breakdown_note(pressures, found, "crack" in solid.tmesh.facet_names),
         "peak_pressure_MPa": max(pressures) / 1e6 if pressures else None,
         "first_crack_time_s": frac.first_break_time,
         "first_crack_pressure_MPa": _first_crack_pressure(frac),
@@ -340,6 +342,19 @@ def _summarise(
         "solved_unknowns": solid.num_dofs,  # at the end (reduced: grows with the band)
         "max_mass_error": max((r.mass_error for r in frac.history), default=0.0),
         "stopped": stopped,
+    }
+
+
+def _inlet_answers(scene: Scene, frac: HydraulicFracture) -> dict[str, Any]:
+    """Return the fluid front and inlet opening of a scene injected at a point (KGD)."""
+    point = getattr(scene.geometry, "injection_point", None)
+    direction = getattr(scene.geometry, "crack_direction", None)
+    if point is None or direction is None or frac.settings.cavity:
+        return {}
+    gdim = frac.solid.gdim
+    return {
+        "fluid_front_m": frac.wet_extent(point[:gdim], direction[:gdim]),
+        "inlet_opening_m": frac.opening_at_cavity(),
     }
 
 
