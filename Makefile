@@ -5,10 +5,11 @@ CONTAINER := bash docker/container.sh
 RANKS ?= 2
 CMD ?= hfcdem info
 
-.PHONY: help image full-image test demo run shell lint
+.PHONY: help image full-image test demo reproduce run shell lint
 
 help:
 	@echo "make demo    run the main demo, results under results/"
+	@echo "make reproduce  the quick reproduction report of the four papers, results/reproduce/report.html"
 	@echo "make test    run the test suite serially and under mpirun -n $(RANKS)"
 	@echo "make run CMD=\"...\"  run a command in the image, checkout mounted"
 	@echo "make shell   open a shell in the image"
@@ -27,6 +28,10 @@ test:
 demo:
 	@$(CONTAINER) run mpirun -n $(RANKS) python3 demos/perforation_no2.py -o results/perforation_no2 --force
 	@echo "results: results/perforation_no2/ (pressure.png, fracture.png, summary.json; fields.bp and interfaces.pvd for ParaView)"
+
+reproduce:
+	@$(CONTAINER) run mpirun -n $(RANKS) hfcdem reproduce --quick -o results/reproduce
+	@echo "report: results/reproduce/report.html (report.md, results.csv, figures/); the full tier: hfcdem reproduce -o DIR"
 
 # CMD reaches the shell through the environment, unexpanded by make, so quoting
 # and $variables in it survive

@@ -163,9 +163,12 @@ def _run(args: argparse.Namespace) -> int:
             f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
         )
         return 0 if summary["stopped"] is None else 4
+    none = f"none ({summary['breakdown_note']})" if summary.get("breakdown_note") else "none"
+    front = summary.get("fluid_front_m")
     say(
         f"{scene.name}: breakdown "
-        + (f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s" if bd else "not reached")
+        + (f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s" if bd else none)
+        + (f", fluid front {front:.2f} m" if front is not None else "")
         + f", fracture degree {summary['fracture_degree']:.4f}, "
         f"{summary['tensile_failures']} tensile / {summary['shear_failures']} shear failures, "
         f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
@@ -264,6 +267,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_mesh(sub)
     _add_run(sub)
     _add_study(sub)
+    _add_reproduce(sub)
     return parser
 
 
@@ -353,6 +357,59 @@ def _add_study(sub: Any) -> None:
     )
     study.add_argument("--force", action="store_true", help="rerun cases that are done")
     study.set_defaults(func=_study)
+
+
+def _reproduce(args: argparse.Namespace) -> int:
+    from mpi4py import MPI
+
+    from hfcdem.reproduce.runner import run_reproduction
+
+    comm = MPI.COMM_WORLD
+    say = _printer(comm)
+    only = [n.strip() for n in args.only.split(",") if n.strip()] if args.only else None
+    try:
+        records = run_reproduction(
+            args.output,
+            comm,
+            tier="quick" if args.quick else "full",
+            fidelity=args.fidelity,
+            resolution=args.resolution,
+            only=only,
+            force=args.force,
+            say=say,
+        )
+    except ValueError as exc:
+        say(f"error: {exc}", err=True)
+        return 2
+    failed = [r.name for r in records if r.status in ("failed", "stopped")]
+    if failed:
+        say(f"cases that failed or stopped: {', '.join(failed)} (see the report)", err=True)
+        return 4
+    return 0
+
+
+def _add_reproduce(sub: Any) -> None:
+    rep = sub.add_parser(
+        "reproduce",
+        help="run the cases of the four papers and write a report beside the papers' values",
+        description="Run every case of the reproduction report (hfcdem/reproduce/cases.py) into "
+        "DIR/cases/NAME, skipping cases done, and write DIR/report.html, report.md, results.csv "
+        "and figures/.  Serially or under mpirun.",
+    )
+    rep.add_argument("-o", "--output", required=True, metavar="DIR")
+    rep.add_argument(
+        "--quick", action="store_true", help="the quick tier: a few cases, minutes on 2 cores"
+    )
+    rep.add_argument(
+        "--fidelity",
+        default="scene",
+        choices=("scene", "uniform", "viscous", "seepage"),
+        help="the flow model of every injection case (default: as each scene file says)",
+    )
+    rep.add_argument("--resolution", metavar="NAME", help="a named mesh resolution for every case")
+    rep.add_argument("--only", metavar="A,B", help="run only these cases (names in the report)")
+    rep.add_argument("--force", action="store_true", help="run again the cases already done")
+    rep.set_defaults(func=_reproduce)
 
 
 def split_petsc_options(argv: Sequence[str]) -> tuple[list[str], dict[str, str]]:

@@ -51,15 +51,28 @@ SHAPE_ORDERINGS = (
     ("4-1", "4-2", "a longer tunnel lowers breakdown"),
 )
 
+# seed pfc2d-fluid-driven-fracture: breakdown (MPa) printed in its text
+PFC2D_STRESS_RATIO = {12e6: 27.1, 15e6: 33.5, 20e6: 43.5}  # Sh (Pa), SH 20 MPa; sec. 4.1, Fig. 9
+PFC2D_RATE = {1e-5: 43.6, 1e-4: 46.5, 5e-4: 65.3}  # m3/s, SH = Sh = 20 MPa; sec. 4.2, Fig. 11
+PFC2D_VISCOSITY = {1e-4: 31.2, 1e-3: 33.4, 1e-2: 37.2}  # Pa s, SH 20, Sh 15 MPa; sec. 4.3, Fig. 12
+
+# seed dem-lbm-influential-factors prints no pressures (its curves only); the one count it
+# prints: at Weibull m = 2, 32 of 78 cracks are shear
+DEM_LBM_WEIBULL_M2_SHEAR = (32, 78)
+
 
 __all__ = [
     "CHARGES",
     "CHARGE_NAMES",
+    "DEM_LBM_WEIBULL_M2_SHEAR",
     "FIELD_FIRST_CRACK_S",
     "FIELD_MEASURED",
     "FIELD_PAPER_SIMULATED",
     "LAB_MEASURED",
     "LAB_PAPER_SIMULATED",
+    "PFC2D_RATE",
+    "PFC2D_STRESS_RATIO",
+    "PFC2D_VISCOSITY",
     "SHAPES",
     "SHAPE_FRACTURE_DEGREE",
     "SHAPE_ORDERINGS",

@@ -254,7 +254,7 @@ def run_cases(
                 continue
             scene = study.case_scene(k)
             case_dir = out / case_directory(k, study.values[k])
-            if _done(case_dir, scene_fingerprint(scene)) and not force:
+            if case_done(case_dir, scene_fingerprint(scene)) and not force:
                 if sub.rank == 0:
                     print(f"case {k}: done before, skipped", flush=True)
                 continue
@@ -288,7 +288,8 @@ def case_directory(k: int, value: Any) -> str:
     return f"case_{k}_{slug}" if slug else f"case_{k}"
 
 
-def _done(case_dir: Path, fingerprint: str) -> bool:
+def case_done(case_dir: Path, fingerprint: str) -> bool:
+    """Whether ``case_dir`` holds a finished run of the scene with ``fingerprint``."""
     try:
         run = json.loads((case_dir / "run.json").read_text())
         summary = json.loads((case_dir / "summary.json").read_text())
@@ -419,6 +420,7 @@ __all__ = [
     "Study",
     "breakdown_text",
     "case_directory",
+    "case_done",
     "case_rows",
     "load_study",
     "numeric",

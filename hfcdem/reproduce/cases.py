@@ -1,0 +1,359 @@
+"""The cases of the reproduction report: what each runs and what it is compared with.
+
+A :class:`Case` names a scene or study file of the checkout, how it runs in
+each tier (``quick``: the whole report in minutes on 2 cores; ``full``: every
+case, at the resolutions the project can afford) and a function that turns
+its results into :class:`Comparison` rows: the paper's value (or a closed
+form), ours, the target and whether it is met.  A paper's number that rests on
+the paper's own choices (an assumed profile, a number read off a figure) says
+so in the row's note.  Papers' values live in :mod:`hfcdem.references`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from hfcdem import references
+from hfcdem.reproduce import compare
+from hfcdem.reproduce.compare import CaseResult, Comparison
+
+TIERS = ("quick", "full")
+FIDELITIES = ("scene", "uniform", "viscous", "seepage")
+
+PAPERS = {
+    "perforation": "CDEM perforation paper (seed cdem-perforation-breakdown): breakdown "
+    "from 3D perforation tunnels",
+    "hfdda": "Implicit DDA paper (seed hfdda-implicit-dda-hydraulic-fracture): "
+    "Griffith, KGD, Rubin's PMMA experiment",
+    "pfc2d": "PFC2D paper (seed pfc2d-fluid-driven-fracture): borehole breakdown, "
+    "stress ratio, rate and viscosity",
+    "dem-lbm": "DEM-LBM paper (seed dem-lbm-influential-factors): rate, viscosity, stress, "
+    "heterogeneity and permeability",
+}
+
+
+@dataclass(frozen=True)
+class Tier:
+    """How a case runs in one tier.
+
+    ``resolution``: the scene's named mesh resolution (None: its default mesh);
+    ``values``: the swept values of a study (None: the study file's);
+    ``fixed``: scene fields set in every run; ``estimate_s``: the wall time
+    on one rank of the project's machine, for the time-left estimate before
+    the case has run.
+    """
+
+    resolution: str | None = None
+    values: tuple[Any, ...] | None = None
+    fixed: Mapping[str, Any] = field(default_factory=dict)
+    estimate_s: float = 60.0
+
+
+@dataclass(frozen=True)
+class Case:
+    """A case of the report.
+
+    ``kind``: ``scene``, ``study`` (a sweep), ``convergence`` or ``missing``
+    (not modelled yet: listed, not run).  ``source``: the scene or study file,
+    from the checkout's root.  ``discretisation``: what is known of the
+    discretisation error at the tiers' resolutions, with its source, when the
+    case does not estimate it itself.  ``figures``: files of the case's
+    output shown in the report.
+    """
+
+    name: str
+    paper: str
+    title: str
+    kind: str
+    source: str | None
+    tiers: Mapping[str, Tier]
+    compare: Callable[[CaseResult], list[Comparison]] | None = None
+    discretisation: str = ""
+    note: str = ""
+    figures: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.paper not in PAPERS:
+            raise ValueError(f"case {self.name}: unknown paper {self.paper!r}")
+        if self.kind not in ("scene", "study", "convergence", "missing"):
+            raise ValueError(f"case {self.name}: unknown kind {self.kind!r}")
+        for tier in self.tiers:
+            if tier not in TIERS:
+                raise ValueError(f"case {self.name}: unknown tier {tier!r}")
+
+
+# -- the cases --------------------------------------------------------------------
+
+_BOREHOLE_H = ("3 mm", "1.5 mm", "0.75 mm")  # a/10, a/20, a/40 at the wall
+
+CASES: tuple[Case, ...] = (
+    Case(
+        "sneddon",
+        "perforation",
+        "Sneddon plate (sec. 3.1, Table 1, 11 points)",
+        "scene",
+        "meshes/scenes/sneddon_plate.toml",
+        {"quick": Tier("coarse", estimate_s=5), "full": Tier(None, estimate_s=10)},
+        compare.sneddon,
+        discretisation="DG2; README 'What is verified': -0.82 % (a/10) to -0.13 % (a/160) "
+        "on a 50a plate; here the 1 m plate's own stiffness dominates",
+        figures=("crack_opening.png",),
+    ),
+    Case(
+        "kgd",
+        "hfdda",
+        "KGD, zero toughness (sec. 4.2, Figs. 8-10)",
+        "scene",
+        "meshes/scenes/kgd_strip.toml",
+        {"quick": Tier("coarse", estimate_s=8), "full": Tier(None, estimate_s=20)},
+        compare.kgd,
+        discretisation="benchmarks/kgd_verification.py: dx 0.5 m on a 400 m plate: "
+        "l -0.6 %, p +2.8 %, w -0.1 %",
+        figures=("pressure.png",),
+    ),
+    Case(
+        "griffith",
+        "hfdda",
+        "Griffith crack with background stress (eq. 17)",
+        "missing",
+        None,
+        {"quick": Tier(), "full": Tier()},
+        note="checked in the suite (tests/test_cdem.py: opening of p - sigma0 to 1e-8), "
+        "not yet a scene of this report",
+    ),
+    Case(
+        "rubin",
+        "hfdda",
+        "Rubin's PMMA experiment (sec. 4.3)",
+        "missing",
+        None,
+        {"quick": Tier(), "full": Tier()},
+        note="not modelled: hfcdem has no scene for the PMMA block, its gauges or its fluid",
+    ),
+    Case(
+        "hubbert_willis",
+        "pfc2d",
+        "Borehole breakdown, non-penetrating limit (fast ramp)",
+        "convergence",
+        "studies/hubbert_willis_limit.toml",
+        {
+            "quick": Tier(values=_BOREHOLE_H, estimate_s=60),
+            "full": Tier(values=(*_BOREHOLE_H, "0.375 mm"), estimate_s=400),
+        },
+        compare.borehole_limit(wet=False),
+        figures=("convergence.png",),
+    ),
+    Case(
+        "haimson_fairhurst",
+        "pfc2d",
+        "Borehole breakdown, penetrating limit (slow ramp)",
+        "convergence",
+        "studies/haimson_fairhurst_limit.toml",
+        {
+            "quick": Tier(values=_BOREHOLE_H, estimate_s=80),
+            "full": Tier(values=(*_BOREHOLE_H, "0.375 mm"), estimate_s=500),
+        },
+        compare.borehole_limit(wet=True),
+        figures=("convergence.png",),
+    ),
+    Case(
+        "stress_ratio",
+        "pfc2d",
+        "Breakdown against Sh (SH 20 MPa), seepage ramp 1 MPa/s",
+        "study",
+        "studies/borehole_seepage_stress_ratio.toml",
+        {"quick": Tier("coarse", estimate_s=30), "full": Tier(None, estimate_s=90)},
+        compare.trend(
+            "breakdown against Sh",
+            compare.paper_trend(
+                references.PFC2D_STRESS_RATIO, "Sh", 1e-6, "MPa", "sec. 4.1, 1e-5 m3/s"
+            ),
+            True,
+            1e-6,
+            "MPa",
+        ),
+        discretisation="a/5 (coarse) / a/10: the dry limit is -31 % / -23 % of its "
+        "converged value (benchmarks/README.md, penetration_rate.py)",
+        figures=("study.png",),
+    ),
+    Case(
+        "rate",
+        "pfc2d",
+        "Breakdown against pressurisation rate (borehole, seepage; the paper pumps at a rate)",
+        "study",
+        "studies/borehole_seepage_rate.toml",
+        {
+            "quick": Tier("coarse", ("0.1 MPa/s", "3 MPa/s", "100 MPa/s"), estimate_s=25),
+            "full": Tier(None, estimate_s=90),
+        },
+        compare.trend(
+            "breakdown against rate",
+            compare.paper_trend(references.PFC2D_RATE, "rate", 1.0, "m3/s", "sec. 4.2")
+            + "; DEM-LBM: rises (no values printed)",
+            True,
+            1e-6,
+            "MPa/s",
+        ),
+        discretisation="the transition collapses on A t_h / P_dry at a/5-a/40 "
+        "(docs/images/penetration_rate.png)",
+        figures=("study.png",),
+    ),
+    Case(
+        "viscosity",
+        "pfc2d",
+        "Breakdown against viscosity (borehole, seepage)",
+        "study",
+        "studies/borehole_seepage_viscosity.toml",
+        {
+            "quick": Tier("coarse", ("1 mPa.s", "1 Pa.s", "10 Pa.s"), estimate_s=25),
+            "full": Tier(None, estimate_s=90),
+        },
+        compare.trend(
+            "breakdown against viscosity",
+            compare.paper_trend(references.PFC2D_VISCOSITY, "viscosity", 1.0, "Pa s", "sec. 4.3")
+            + "; DEM-LBM: rises (no values printed)",
+            True,
+            1.0,
+            "Pa s",
+        ),
+        figures=("study.png",),
+    ),
+    Case(
+        "permeability",
+        "dem-lbm",
+        "Breakdown against joint aperture (permeability)",
+        "study",
+        "studies/borehole_seepage_aperture.toml",
+        {
+            "quick": Tier("coarse", ("1 um", "5 um", "20 um"), estimate_s=25),
+            "full": Tier(None, estimate_s=90),
+        },
+        compare.trend(
+            "breakdown against permeability",
+            "falls as permeability rises (sec. 3.5; no values printed)",
+            False,
+            1e6,
+            "um",
+        ),
+        figures=("study.png",),
+    ),
+    Case(
+        "weibull",
+        "dem-lbm",
+        "Breakdown against Weibull modulus m (heterogeneity)",
+        "study",
+        "studies/borehole_seepage_weibull.toml",
+        {"full": Tier(None, estimate_s=90)},
+        compare.trend(
+            "breakdown against Weibull m",
+            "rises as the rock gets more homogeneous, larger m (sec. 3.4; no values printed)",
+            True,
+            1.0,
+            "",
+        ),
+        figures=("study.png",),
+    ),
+    Case(
+        "lab_specimen",
+        "perforation",
+        "Lab specimen, azimuth 30/45/60 deg (sec. 3.2)",
+        "study",
+        "studies/lab_azimuth.toml",
+        {"quick": Tier("coarse", estimate_s=400), "full": Tier("coarse", estimate_s=400)},
+        compare.lab_specimen,
+        discretisation="not measured at this resolution (coarse, 2 mm at the perforations)",
+        note="dry joints, as the scene files say (a calibration choice, see the README)",
+        figures=("study.png",),
+    ),
+    Case(
+        "no2",
+        "perforation",
+        "Perforation No. 2, the main scene (sec. 4, Fig. 15)",
+        "scene",
+        "meshes/scenes/perforation_no2.toml",
+        {"quick": Tier("coarse", estimate_s=200), "full": Tier("coarse", estimate_s=200)},
+        compare.peak_against(
+            "breakdown (peak pressure)",
+            references.CHARGES["no2"],
+            "the paper's CDEM (Fig. 15)",
+            0.05,
+            "calibrated film, start and duration (scene file)",
+        ),
+        discretisation="coarse -> default moves the first crack -5.5 % (benchmarks/README.md); "
+        "the breakdown at default is not measured",
+        figures=("pressure.png", "fracture.png"),
+    ),
+    Case(
+        "four_charges",
+        "perforation",
+        "The four charges (sec. 4.4, Fig. 15)",
+        "study",
+        "studies/four_charges.toml",
+        {"full": Tier("coarse", estimate_s=900)},
+        compare.four_charges,
+        discretisation="as No. 2 (coarse)",
+        figures=("study.png",),
+    ),
+    Case(
+        "shape_study",
+        "perforation",
+        "The shape study (sec. 5, Tables 7-8, Fig. 21)",
+        "study",
+        "studies/shape_study.toml",
+        {"full": Tier("coarse", estimate_s=2400)},
+        compare.shape_study,
+        discretisation="as No. 2 (coarse)",
+        figures=("study.png",),
+    ),
+    Case(
+        "field_cluster",
+        "perforation",
+        "Field cluster, Changqing (sec. 3.3)",
+        "scene",
+        "meshes/scenes/field_cluster.toml",
+        {"full": Tier("coarse", estimate_s=3300)},
+        compare.peak_against(
+            "breakdown (peak pressure)",
+            references.FIELD_MEASURED,
+            "measured in the field",
+            0.10,
+            f"the paper's CDEM: {references.FIELD_PAPER_SIMULATED} MPa",
+        ),
+        discretisation="not measured (coarse, 19k cells)",
+        figures=("pressure.png", "fracture.png"),
+    ),
+)
+
+
+def select_cases(tier: str, only: Sequence[str] | None = None) -> list[Case]:
+    """Return the cases of ``tier`` (all tiers' cases named in ``only``, in registry order).
+
+    Raises ValueError naming the unknown tier or case names.
+    """
+    if tier not in TIERS:
+        raise ValueError(f"tier: expected one of {', '.join(TIERS)}, got {tier!r}")
+    names = {c.name for c in CASES}
+    if only:
+        unknown = [n for n in only if n not in names]
+        if unknown:
+            raise ValueError(
+                f"--only: unknown case(s) {', '.join(unknown)}; the cases are "
+                + ", ".join(c.name for c in CASES)
+            )
+        return [c for c in CASES if c.name in only and tier in c.tiers]
+    return [c for c in CASES if tier in c.tiers]
+
+
+__all__ = [
+    "CASES",
+    "FIDELITIES",
+    "PAPERS",
+    "TIERS",
+    "Case",
+    "CaseResult",
+    "Comparison",
+    "Tier",
+    "select_cases",
+]

@@ -1,0 +1,342 @@
+"""Run the report's cases, resumably, with a progress line and the time left.
+
+Each case runs into ``DIR/cases/NAME`` through the workflow its file asks for
+(:func:`hfcdem.workflows.run.run_scene`, :func:`~hfcdem.workflows.study.run_study`
+or :func:`~hfcdem.workflows.convergence.run_convergence`); those skip what is
+already done there, so an interrupted report continues where it stopped.  A
+case that fails (bad input, a solver stop) is recorded with its message and
+the report goes on.  ``case.json`` keeps each case's rows, status and wall time.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+from hfcdem.config.units import FieldError
+from hfcdem.io.files import prepare_output_dir, write_json
+from hfcdem.mesh.tagged import MeshingError
+from hfcdem.reproduce.cases import FIDELITIES, Case, Tier, select_cases
+from hfcdem.reproduce.compare import CaseResult, Comparison
+from hfcdem.solvers import SimulationStopped, SolverError
+
+ROOT = Path(__file__).resolve().parents[2]  # the checkout: scene and study files
+
+# what a case may fail with and the report survive (everything else is a bug)
+CASE_ERRORS = (FieldError, SimulationStopped, SolverError, MeshingError, OSError)
+
+
+@dataclass(frozen=True)
+class CaseRecord:
+    """One case as the report shows it: rows, status, resolution, cost."""
+
+    name: str
+    paper: str
+    title: str
+    status: str  # "ok", "failed", "stopped", "not modelled"
+    comparisons: tuple[Comparison, ...] = ()
+    message: str = ""
+    resolution: str = ""
+    discretisation: str = ""
+    note: str = ""
+    wall_time_s: float = 0.0
+    figures: tuple[str, ...] = ()  # paths relative to the report's directory
+    skipped: bool = False
+
+
+@dataclass
+class _Clock:
+    """Time left: the remaining estimates scaled by how the done cases compared."""
+
+    spent: float = 0.0
+    estimated: float = 0.0
+    left: list[float] = field(default_factory=list)
+
+    def remaining(self) -> float:
+        scale = self.spent / self.estimated if self.estimated > 0 and self.spent > 0 else 1.0
+        return scale * sum(self.left)
+
+
+def run_reproduction(
+    output: str | Path,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+    tier: str = "quick",
+    fidelity: str = "scene",
+    resolution: str | None = None,
+    only: Sequence[str] | None = None,
+    force: bool = False,
+    say: Callable[[str], None] | None = None,
+) -> list[CaseRecord]:
+    """Run the cases of ``tier`` (or those named in ``only``) into ``output``; return them.
+
+    ``fidelity``: ``scene`` (as each scene file says), ``uniform`` or ``viscous``
+    (``solver.fidelity`` of every injection scene) or ``seepage`` (the joints
+    fill in time: ``injection.wall_joints``).  ``resolution``: a named mesh
+    resolution for every case instead of the tier's.  ``force``: run again what
+    is done.  Collective.
+    """
+    say = say or (lambda msg: None)
+    if fidelity not in FIDELITIES:
+        raise ValueError(f"--fidelity: expected one of {', '.join(FIDELITIES)}, got {fidelity!r}")
+    cases = select_cases(tier, only)
+    if not cases:
+        raise ValueError(f"no case of tier {tier!r} among {', '.join(only or [])}")
+    out = prepare_output_dir(output, comm)
+    clock = _Clock(left=[_estimate(c, c.tiers[tier], out, comm.size) for c in cases])
+    records = []
+    for i, case in enumerate(cases, start=1):
+        est = clock.left.pop(0)
+        where = out / "cases" / case.name
+        say(
+            f"[{i}/{len(cases)}] {case.name}: {case.title} (about {_minutes(est)}; "
+            f"about {_minutes(clock.remaining() + est)} left in all)"
+        )
+        t0 = time.perf_counter()
+        record = _run_case(case, case.tiers[tier], where, comm, fidelity, resolution, force, say)
+        spent = time.perf_counter() - t0
+        if record.status == "ok" and not record.skipped:
+            clock.spent += spent
+            clock.estimated += est
+        record = _finish(record, where, out, spent, comm)
+        records.append(record)
+        met = sum(1 for c in record.comparisons if c.met)
+        judged = sum(1 for c in record.comparisons if c.met is not None)
+        state = "done before" if record.skipped else f"{record.status} in {spent:.0f} s"
+        say(
+            f"[{i}/{len(cases)}] {case.name}: {state}; {judged} rows judged, {met} met"
+            + (f" ({record.message})" if record.message else "")
+        )
+    meta = run_tag(comm) | {"tier": tier, "fidelity": fidelity, "resolution": resolution}
+    if comm.rank == 0:
+        from hfcdem.reproduce.report import write_report
+
+        write_report(out, records, meta)
+    comm.barrier()
+    say(f"report: {out / 'report.html'} (and report.md, results.csv, figures/)")
+    return records
+
+
+def _minutes(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.0f} min"
+
+
+def _estimate(case: Case, tier: Tier, out: Path, ranks: int) -> float:
+    """Return the case's last wall time here, else its tier's one-rank estimate."""
+    try:
+        data = json.loads((out / "cases" / case.name / "case.json").read_text())
+        return float(data["wall_time_s"])
+    except (OSError, ValueError, KeyError):
+        return tier.estimate_s / max(1.0, 0.7 * ranks) if case.kind != "missing" else 0.0
+
+
+def _overrides(case: Case, fidelity: str) -> dict[str, Any]:
+    if fidelity == "scene":
+        return {}
+    if fidelity == "seepage":
+        return {"injection.wall_joints": "seepage"}
+    return {"solver.fidelity": fidelity}
+
+
+def _run_case(
+    case: Case,
+    tier: Tier,
+    where: Path,
+    comm: MPI.Comm,
+    fidelity: str,
+    resolution: str | None,
+    force: bool,
+    say: Callable[[str], None],
+) -> CaseRecord:
+    """Run one case and compare it (collective); failures become the record's status."""
+    base = CaseRecord(
+        case.name,
+        case.paper,
+        case.title,
+        "ok",
+        discretisation=case.discretisation,
+        note=case.note,
+    )
+    if case.kind == "missing" or case.source is None or case.compare is None:
+        return _replace(base, status="not modelled")
+    res = resolution or tier.resolution
+
+    def progress(msg: str) -> None:
+        say(f"    {msg}")
+
+    try:
+        result, text, skipped = _execute(case, tier, where, comm, fidelity, res, force, progress)
+    except CASE_ERRORS as exc:
+        return _replace(base, status="failed", message=f"{type(exc).__name__}: {exc}")
+    compared: Any = None
+    if comm.rank == 0:
+        try:
+            compared = tuple(case.compare(result))
+        except (KeyError, TypeError, ValueError, ZeroDivisionError) as exc:
+            compared = f"the comparison failed: {type(exc).__name__}: {exc}"
+    compared = comm.bcast(compared, root=0)
+    if isinstance(compared, str):
+        return _replace(base, status="failed", message=compared, resolution=text)
+    stopped = [s for s in _stops(result) if s]
+    return _replace(
+        base,
+        status="stopped" if stopped else "ok",
+        message="; ".join(stopped),
+        comparisons=compared,
+        resolution=text,
+        figures=tuple(str(where / f) for f in case.figures),
+        skipped=skipped,
+    )
+
+
+def _replace(record: CaseRecord, **changes: Any) -> CaseRecord:
+    return dataclasses.replace(record, **changes)
+
+
+def _stops(result: CaseResult) -> list[str]:
+    runs = [result.summary] if result.summary else list(result.rows)
+    return [str(r.get("stopped")) for r in runs if r.get("stopped")]
+
+
+def _execute(
+    case: Case,
+    tier: Tier,
+    where: Path,
+    comm: MPI.Comm,
+    fidelity: str,
+    resolution: str | None,
+    force: bool,
+    say: Callable[[str], None],
+) -> tuple[CaseResult, str, bool]:
+    """Run the case's workflow (it skips what is done); return its results and resolution."""
+    from hfcdem.config.scene import load_scene
+    from hfcdem.workflows.convergence import characteristic_size, load_convergence
+    from hfcdem.workflows.convergence import run_convergence as converge
+    from hfcdem.workflows.run import run_scene, scene_fingerprint
+    from hfcdem.workflows.study import case_done, load_study, run_study
+
+    assert case.source is not None
+    path = ROOT / case.source
+    if case.kind == "scene":
+        scene = load_scene(path, resolution, overrides=dict(tier.fixed))
+        if scene.physics.injection is not None and fidelity != "scene":
+            scene = load_scene(
+                path, resolution, overrides={**tier.fixed, **_overrides(case, fidelity)}
+            )
+        skipped = case_done(where, scene_fingerprint(scene)) and not force
+        if skipped:
+            summary = json.loads((where / "summary.json").read_text())
+        else:
+            summary = run_scene(scene, where, comm, force=True, say=say)
+        text = _size_text(characteristic_size(scene), resolution, summary.get("cells"))
+        return CaseResult(where, (scene,), summary=summary), text, skipped
+    if case.kind == "study":
+        study = load_study(path, resolution)
+        if tier.values:
+            study = study.with_values(tier.values)
+        study = study.with_fixed(dict(tier.fixed))
+        if fidelity != "scene" and study.case_scene(0).physics.injection is not None:
+            study = study.with_fixed(_overrides(case, fidelity))
+        scenes = tuple(study.case_scene(k) for k in range(len(study.values)))
+        skipped = not force and all(
+            case_done(where / d, scene_fingerprint(s))
+            for d, s in zip(_case_dirs(study), scenes, strict=True)
+        )
+        rows = run_study(study, where, comm, force=force, say=say)
+        text = _size_text(characteristic_size(scenes[0]), study.resolution, rows[0].get("cells"))
+        return CaseResult(where, scenes, rows=tuple(rows)), text, skipped
+    conv = load_convergence(path, resolution)
+    if tier.values:
+        conv = conv.with_values(tier.values)
+    if tier.fixed:
+        conv = conv.with_fixed(dict(tier.fixed))
+    scenes = tuple(conv.case_scene(k) for k in range(len(conv.values)))
+    result = converge(conv, where, comm, force=force, say=say)
+    sizes = sorted(characteristic_size(s) * 1e3 for s in scenes)
+    text = f"h = {sizes[-1]:g} -> {sizes[0]:g} mm ({len(sizes)} meshes)"
+    estimates = {k: asdict(e) for k, e in result.estimates.items()}
+    return CaseResult(where, scenes, rows=result.rows, estimates=estimates), text, False
+
+
+def _case_dirs(study: Any) -> list[str]:
+    from hfcdem.workflows.study import case_directory
+
+    return [case_directory(k, v) for k, v in enumerate(study.values)]
+
+
+def _size_text(h: float, resolution: str | None, cells: Any) -> str:
+    cells_text = f", {int(cells):,} cells" if isinstance(cells, int | float) else ""
+    return f"{resolution or 'default'} (h = {h * 1e3:g} mm{cells_text})"
+
+
+def _finish(record: CaseRecord, where: Path, out: Path, spent: float, comm: MPI.Comm) -> CaseRecord:
+    """Keep the first run's wall time when the case was done before; write case.json."""
+    path = where / "case.json"
+    if record.skipped or record.status == "not modelled":
+        old = comm.bcast(_read(path) if comm.rank == 0 else None, root=0)
+        spent = float(old.get("wall_time_s", 0.0)) if old else 0.0
+    shown = [str(Path(f).relative_to(out)) for f in record.figures if Path(f).exists()]
+    figures = tuple(comm.bcast(shown if comm.rank == 0 else None, root=0))
+    record = _replace(record, wall_time_s=spent, figures=figures)
+    if record.status != "not modelled":
+        prepare_output_dir(where, comm)
+        write_json(path, _as_json(record), comm)
+    return record
+
+
+def _read(path: Path) -> dict[str, Any] | None:
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def _as_json(record: CaseRecord) -> dict[str, Any]:
+    data = asdict(record)
+    data["comparisons"] = [
+        {**asdict(c), "gap": c.gap, "met": c.met, "target": c.target} for c in record.comparisons
+    ]
+    return data
+
+
+def run_tag(comm: MPI.Comm) -> dict[str, Any]:
+    """Return the date, commit, machine and rank count the report is made with."""
+    import datetime
+    import os
+    import platform
+    import subprocess
+
+    commit = "unknown"
+    try:
+        commit = subprocess.run(
+            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        pass
+    memory = ""
+    try:
+        pages = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        memory = f", {pages / 2**30:.0f} GB"
+    except (ValueError, OSError):
+        pass
+    return {
+        "date": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        "commit": commit,
+        "machine": f"{platform.machine()}, {os.cpu_count()} cores{memory}, "
+        f"{platform.system()} {platform.release()}",
+        "ranks": comm.size,
+    }
+
+
+__all__ = ["CASE_ERRORS", "CaseRecord", "CaseResult", "run_reproduction", "run_tag"]

@@ -1,0 +1,108 @@
+"""`hfcdem reproduce`: the report of the four papers, at CI size (two quick cases)."""
+
+import csv
+import json
+import math
+
+import pytest
+from mpi4py import MPI
+
+from hfcdem.cli import main
+from hfcdem.reproduce.cases import CASES, select_cases
+from hfcdem.reproduce.compare import CaseResult, Comparison, trend
+from hfcdem.reproduce.runner import run_reproduction
+
+
+def _rows(path):
+    with path.open() as f:
+        return list(csv.DictReader(f))
+
+
+def test_quick_report_of_sneddon_and_kgd_and_its_resume(shared_tmp_path, capsys):
+    out = shared_tmp_path / "report"
+    argv = ["reproduce", "--quick", "--only", "sneddon,kgd,rubin", "-o", str(out)]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    if MPI.COMM_WORLD.rank == 0:
+        assert "[1/3] sneddon" in printed and "left in all" in printed
+    rows = {(r["case"], r["quantity"]): r for r in _rows(out / "results.csv")}
+    centre = rows[("sneddon", "crack-centre u_y")]
+    # the 1 m fixed plate at coarse: -4.1 % of Sneddon's infinite plate
+    assert centre["met"] == "met" and -0.05 < float(centre["gap"].rstrip("%")) / 100 < -0.03
+    assert centre["resolution"].startswith("coarse (h = ")
+    for quantity in ("half-length (fluid front)", "inlet net pressure", "inlet opening"):
+        row = rows[("kgd", quantity)]
+        assert row["met"] == "met", row
+        assert abs(float(row["gap"].rstrip("%"))) < 8.0, row  # measured 6.6, 6.3, 2.6 %
+    assert rows[("kgd", "breakdown peak")]["ours"] == "none"
+    assert rows[("rubin", "")]["status"] == "not modelled"
+    text = (out / "report.html").read_text()
+    assert "figures/sneddon_crack_opening.png" in text and "Rubin" in text
+    assert (out / "figures" / "gaps.png").stat().st_size > 5_000
+    assert "| crack-centre u_y |" in (out / "report.md").read_text()
+    first = json.loads((out / "cases" / "kgd" / "case.json").read_text())
+
+    # again: every case is done, nothing runs, the wall times are the first run's
+    records = run_reproduction(out, tier="quick", only=["sneddon", "kgd"])
+    assert all(r.skipped for r in records)
+    kgd = next(r for r in records if r.name == "kgd")
+    assert kgd.wall_time_s == pytest.approx(first["wall_time_s"])
+    assert [c.met for c in kgd.comparisons] == [c["met"] for c in first["comparisons"]]
+
+
+def test_a_failing_case_is_reported_and_the_report_still_written(shared_tmp_path, capsys):
+    out = shared_tmp_path / "bad"
+    argv = ["reproduce", "--quick", "--only", "sneddon", "--resolution", "nosuch", "-o", str(out)]
+    assert main(argv) == 4
+    (row,) = _rows(out / "results.csv")
+    assert row["status"] == "failed" and "nosuch" in row["note"]
+    if MPI.COMM_WORLD.rank == 0:
+        assert "sneddon" in capsys.readouterr().err
+
+
+def test_bad_choices_name_the_option(shared_tmp_path):
+    with pytest.raises(ValueError, match=r"--only: unknown case.*sneddon"):
+        run_reproduction(shared_tmp_path, only=["nope"])
+    with pytest.raises(ValueError, match="--fidelity"):
+        run_reproduction(shared_tmp_path, fidelity="exact")
+    with pytest.raises(ValueError, match="tier"):
+        select_cases("slow")
+    with pytest.raises(SystemExit):
+        main(["reproduce", "-o", str(shared_tmp_path), "--fidelity", "exact"])
+
+
+@pytest.mark.serial
+def test_every_case_is_well_formed():
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    names = [c.name for c in CASES]
+    assert len(set(names)) == len(names)
+    quick = select_cases("quick")
+    assert {"sneddon", "kgd", "hubbert_willis", "no2"} <= {c.name for c in quick}
+    for case in CASES:
+        if case.kind != "missing":
+            assert (root / case.source).exists(), case.source
+            assert case.compare is not None
+
+
+@pytest.mark.serial
+def test_comparison_rows_judge_gaps_and_trends(tmp_path):
+    c = Comparison("p", 10.45, 10.0, "MPa", tolerance=0.05)
+    assert c.gap == pytest.approx(0.045) and c.met and c.target == "within 5%"
+    assert not Comparison("p", 10.6, 10.0, tolerance=0.05).met
+    assert Comparison("p", 10.6, 10.0).met is None  # no target: not judged
+    assert Comparison("p", None, 10.0, tolerance=0.1).met is None
+    assert Comparison("p", math.nan, 10.0, tolerance=0.1).gap is None
+
+    rows = tuple(
+        {"x": x, "breakdown_pressure_MPa": p} for x, p in ((1, 10.0), (3, 12.0), (2, 11.5))
+    )
+    result = CaseResult(tmp_path, (), rows=rows)
+    (rising,) = trend("b", "rises", True, 1.0, "")(result)
+    assert rising.met and rising.ours == pytest.approx(0.2) and rising.note == "monotone"
+    (falling,) = trend("b", "falls", False, 1.0, "")(result)
+    assert falling.met is False
+    rows = ({"x": 1, "breakdown_pressure_MPa": 10.0}, {"x": 2, "breakdown_pressure_MPa": None})
+    (lonely,) = trend("b", "rises", True, 1.0, "")(CaseResult(tmp_path, (), rows=rows))
+    assert lonely.met is False and "fewer than two" in lonely.note
