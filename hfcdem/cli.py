@@ -381,6 +381,20 @@ def _reproduce(args: argparse.Namespace) -> int:
     except ValueError as exc:
         say(f"error: {exc}", err=True)
         return 2
+    if args.readme:
+        from hfcdem.reproduce.report import update_readme
+
+        error = None
+        if comm.rank == 0:
+            try:
+                update_readme(Path(args.readme), (Path(args.output) / "summary.md").read_text())
+            except (OSError, ValueError) as exc:
+                error = str(exc)
+        error = comm.bcast(error, root=0)
+        if error:
+            say(f"error: {error}", err=True)
+            return 2
+        say(f"{args.readme}: its results table is now this report's")
     failed = [r.name for r in records if r.status in ("failed", "stopped")]
     if failed:
         say(f"cases that failed or stopped: {', '.join(failed)} (see the report)", err=True)
@@ -409,6 +423,11 @@ def _add_reproduce(sub: Any) -> None:
     rep.add_argument("--resolution", metavar="NAME", help="a named mesh resolution for every case")
     rep.add_argument("--only", metavar="A,B", help="run only these cases (names in the report)")
     rep.add_argument("--force", action="store_true", help="run again the cases already done")
+    rep.add_argument(
+        "--readme",
+        metavar="FILE",
+        help="write the report's summary table into FILE, between its 'hfcdem reproduce' markers",
+    )
     rep.set_defaults(func=_reproduce)
 
 

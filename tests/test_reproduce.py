@@ -10,6 +10,7 @@ from mpi4py import MPI
 from hfcdem.cli import main
 from hfcdem.reproduce.cases import CASES, select_cases
 from hfcdem.reproduce.compare import CaseResult, Comparison, trend
+from hfcdem.reproduce.report import BEGIN, END, update_readme
 from hfcdem.reproduce.runner import run_reproduction
 
 
@@ -20,8 +21,15 @@ def _rows(path):
 
 def test_quick_report_of_sneddon_and_kgd_and_its_resume(shared_tmp_path, capsys):
     out = shared_tmp_path / "report"
+    readme = shared_tmp_path / "README.md"
+    if MPI.COMM_WORLD.rank == 0:
+        readme.write_text(f"# title\n{BEGIN}\nold table\n{END}\nafter\n")
+    MPI.COMM_WORLD.barrier()
     argv = ["reproduce", "--quick", "--only", "sneddon,kgd,rubin", "-o", str(out)]
-    assert main(argv) == 0
+    assert main([*argv, "--readme", str(readme)]) == 0
+    text = readme.read_text()
+    assert "old table" not in text and text.endswith(f"{END}\nafter\n")
+    assert "| sneddon | crack-centre u_y |" in text and "| rubin | not modelled |" in text
     printed = capsys.readouterr().out
     if MPI.COMM_WORLD.rank == 0:
         assert "[1/3] sneddon" in printed and "left in all" in printed
@@ -69,6 +77,12 @@ def test_bad_choices_name_the_option(shared_tmp_path):
         select_cases("slow")
     with pytest.raises(SystemExit):
         main(["reproduce", "-o", str(shared_tmp_path), "--fidelity", "exact"])
+    plain = shared_tmp_path / "plain.md"
+    if MPI.COMM_WORLD.rank == 0:
+        plain.write_text("no markers\n")
+        with pytest.raises(ValueError, match=r"--readme: .*plain.md has no block"):
+            update_readme(plain, "table")
+        assert plain.read_text() == "no markers\n"
 
 
 @pytest.mark.serial

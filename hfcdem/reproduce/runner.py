@@ -108,6 +108,9 @@ def run_reproduction(
         records.append(record)
         met = sum(1 for c in record.comparisons if c.met)
         judged = sum(1 for c in record.comparisons if c.met is not None)
+        if record.status == "not modelled":
+            say(f"[{i}/{len(cases)}] {case.name}: not modelled, listed in the report")
+            continue
         state = "done before" if record.skipped else f"{record.status} in {spent:.0f} s"
         say(
             f"[{i}/{len(cases)}] {case.name}: {state}; {judged} rows judged, {met} met"
