@@ -309,3 +309,11 @@ def test_summary_holds_the_resolved_scene(shared_tmp_path):
     # zero toughness: the path breaks in the first step, from the initial 0 MPa
     assert summary["first_crack_pressure_MPa"] == pytest.approx(0.0)
     assert summary["first_crack_time_s"] <= 0.5
+
+
+@pytest.mark.serial
+def test_first_crack_places_are_the_tunnels_thirds():
+    from hfcdem.workflows.run import tunnel_place
+
+    places = [tunnel_place(d, 0.23) for d in (0.0, 0.07, 0.1225, 0.2, 0.23, 0.3)]
+    assert places == ["root", "root", "middle", "far end", "far end", "beyond the tip"]

@@ -299,12 +299,15 @@ def peak_against(
             Comparison(quantity, s.get("peak_pressure_MPa"), reference, "MPa", source, tolerance,
                        note=f"{extra}{'; ' + note if note else ''}")
         ]  # fmt: skip
-        where = (s.get("first_crack") or {}).get("distance_from_wellbore_wall_m")
+        first = s.get("first_crack") or {}
+        where, place = first.get("distance_from_wellbore_wall_m"), first.get("place")
         if where is not None:
             rows.append(
-                Comparison("first crack from the wellbore wall", where * 1e3, unit="mm",
-                           ours_text=f"{where * 1e3:.1f} mm at {s.get('first_crack_time_s'):.3g} s",
-                           source="the paper: at the root (Figs. 10, 16)")
+                Comparison("first crack place", where * 1e3, unit="mm",
+                           ours_text=f"{place or ''}, {where * 1e3:.1f} mm from the wellbore "
+                           f"wall at {s.get('first_crack_time_s'):.3g} s",
+                           reference_text="root", agrees=place == "root" if place else None,
+                           source="the paper's Figs. 10 and 16")
             )  # fmt: skip
         return rows
 

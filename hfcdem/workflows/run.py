@@ -486,7 +486,23 @@ def _first_crack(scene: Scene, frac: HydraulicFracture) -> dict[str, Any] | None
         across = point.copy()
         across["xyz".index(wellbore.axis)] = 0.0
         out["distance_from_wellbore_wall_m"] = float(np.linalg.norm(across) - wellbore.radius)
+        tunnels = getattr(scene.geometry, "perforations", ())
+        if tunnels:
+            length = max(t.profile.stations[-1] for t in tunnels)
+            out["place"] = tunnel_place(out["distance_from_wellbore_wall_m"], length)
     return out
+
+
+def tunnel_place(distance: float, length: float) -> str:
+    """Name a distance from the wellbore wall in the paper's terms, for a tunnel ``length`` long.
+
+    The tunnel's thirds: ``root``, ``middle``, ``far end``; ``beyond the tip`` past it.
+    """
+    if distance <= length / 3.0:
+        return "root"
+    if distance <= 2.0 * length / 3.0:
+        return "middle"
+    return "far end" if distance <= length else "beyond the tip"
 
 
 def _resolved_scene(scene: Scene) -> dict[str, Any]:
