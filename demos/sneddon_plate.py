@@ -1,3 +1,24 @@
+# ---
+# jupyter:
+#   jupytext:
+#     formats: py:percent
+# ---
+
+# %% [markdown]
+# # A pressurised crack in a plate, against Sneddon (perforation paper, section 3.1)
+#
+# Before trusting a breakdown pressure, check that the solid opens a crack as
+# elasticity says.  A straight crack of half-length l in an infinite plate,
+# its faces under a pressure p, opens into an ellipse: each face moves by
+# u_y = 2 p l (1 - nu^2) / E sqrt(1 - x^2 / l^2) (Sneddon; the paper's eq. 21).
+#
+# In hfcdem the crack is an interface that starts broken and open; every other
+# element face is a pair of springs kn = alpha E / h.  Two things separate our
+# answer from Sneddon's: the springs add compliance (it falls as 1/alpha), and
+# the paper's 1 m plate with fixed edges is stiffer than an infinite one (about
+# 6 %).  A 10 m plate removes the second; what is left is the mesh.
+
+# %%
 """Pressurised crack in a plate: the paper's verification against Sneddon (section 3.1).
 
 A 0.2 m crack in the middle of a 1 m square plate (Table 1: E 210 GPa, nu 0.25)
@@ -36,7 +57,16 @@ from hfcdem.workflows.run import OutputInUse, run_scene
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 
+# %% [markdown]
+# ## The run
+#
+# One elastic solve: the crack pressure on both faces, the springs held
+# elastic (a pressure held past the strength would run the crack to the
+# edge).  The scene file gives Table 1's plate; the options change its size,
+# the spring factor and the element size at the crack.
 
+
+# %%
 def main(argv: list[str] | None = None) -> dict:
     """Run the demo; return the run's summary."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
@@ -69,6 +99,16 @@ def main(argv: list[str] | None = None) -> dict:
     return summary
 
 
+# %% [markdown]
+# ## Reading the answer
+#
+# ``crack_opening.png`` draws u_y at the paper's 11 points beside eq. (21).
+# On the 1 m plate the centre comes out about 4 % low (the fixed edges); on
+# a 10 m plate with alpha 1000, within 1 %.  ``hfcdem study
+# studies/sneddon_convergence.toml`` estimates the mesh's share by Richardson
+# extrapolation; ``studies/sneddon_alpha.toml`` the springs'.
+
+# %%
 if __name__ == "__main__":
     try:
         main()
