@@ -63,7 +63,7 @@ class Comparison:
     def target(self) -> str:
         """The target in words."""
         if self.agrees is not None:
-            return "same direction"
+            return "as the paper"
         return "" if self.tolerance is None else f"within {self.tolerance:.0%}"
 
 
@@ -312,7 +312,7 @@ def peak_against(
             place = tunnel_place(where, max(t.profile.stations[-1] for t in tunnels))
         if where is not None:
             rows.append(
-                Comparison("first crack place", where * 1e3, unit="mm",
+                Comparison("first crack place", where * 1e3,
                            ours_text=f"{place or ''}, {where * 1e3:.1f} mm from the wellbore "
                            f"wall at {s.get('first_crack_time_s'):.3g} s",
                            reference_text="root", agrees=place == "root" if place else None,

@@ -130,7 +130,8 @@ def summary_table(records: Sequence[CaseRecord], meta: Mapping[str, Any]) -> str
     for row in _rows(records):
         if row["met"] or row["status"] != "ok":
             cells = [
-                row["case"],
+                row["case"]
+                + (f" ({row['status']})" if row["status"] in ("failed", "stopped") else ""),
                 row["quantity"] or row["status"],
                 row["reference"] + (f" {row['unit']}" if row["unit"] and row["reference"] else ""),
                 row["ours"] + (f" {row['unit']}" if row["unit"] and row["ours"] else ""),

@@ -232,7 +232,7 @@ def _execute(
             scene = load_scene(
                 path, resolution, overrides={**tier.fixed, **_overrides(case, fidelity)}
             )
-        skipped = case_done(where, scene_fingerprint(scene)) and not force
+        skipped = case_done(where, scene_fingerprint(scene), keep_stopped=True) and not force
         if skipped:
             summary = json.loads((where / "summary.json").read_text())
         else:
@@ -248,10 +248,10 @@ def _execute(
             study = study.with_fixed(_overrides(case, fidelity))
         scenes = tuple(study.case_scene(k) for k in range(len(study.values)))
         skipped = not force and all(
-            case_done(where / d, scene_fingerprint(s))
+            case_done(where / d, scene_fingerprint(s), keep_stopped=True)
             for d, s in zip(_case_dirs(study), scenes, strict=True)
         )
-        rows = run_study(study, where, comm, force=force, say=say)
+        rows = run_study(study, where, comm, force=force, say=say, keep_stopped=True)
         text = _size_text(characteristic_size(scenes[0]), study.resolution, rows[0].get("cells"))
         return CaseResult(where, scenes, rows=tuple(rows)), text, skipped
     conv = load_convergence(path, resolution)
@@ -262,7 +262,7 @@ def _execute(
     scenes = tuple(conv.case_scene(k) for k in range(len(conv.values)))
     result = converge(conv, where, comm, force=force, say=say)
     sizes = sorted(characteristic_size(s) * 1e3 for s in scenes)
-    text = f"h = {sizes[-1]:g} -> {sizes[0]:g} mm ({len(sizes)} meshes)"
+    text = f"h = {sizes[-1]:.4g} -> {sizes[0]:.4g} mm ({len(sizes)} meshes)"
     estimates = {k: asdict(e) for k, e in result.estimates.items()}
     return CaseResult(where, scenes, rows=result.rows, estimates=estimates), text, False
 
@@ -275,7 +275,7 @@ def _case_dirs(study: Any) -> list[str]:
 
 def _size_text(h: float, resolution: str | None, cells: Any) -> str:
     cells_text = f", {int(cells):,} cells" if isinstance(cells, int | float) else ""
-    return f"{resolution or 'default'} (h = {h * 1e3:g} mm{cells_text})"
+    return f"{resolution or 'default'} (h = {h * 1e3:.4g} mm{cells_text})"
 
 
 def _finish(record: CaseRecord, where: Path, out: Path, spent: float, comm: MPI.Comm) -> CaseRecord:
@@ -309,24 +309,36 @@ def _as_json(record: CaseRecord) -> dict[str, Any]:
     return data
 
 
+def _commit(root: Path) -> str | None:
+    """Return the checkout's commit (12 hex digits), read from .git: the image has no git."""
+    git = root / ".git"
+    try:
+        if git.is_file():  # a worktree: "gitdir: PATH"
+            git = (root / git.read_text().split(":", 1)[1].strip()).resolve()
+        head = (git / "HEAD").read_text().strip()
+        if not head.startswith("ref:"):
+            return head[:12]
+        ref = head.split(":", 1)[1].strip()
+        common = git / "commondir"
+        base = (git / common.read_text().strip()).resolve() if common.exists() else git
+        for where in (git, base):
+            if (where / ref).exists():
+                return (where / ref).read_text().strip()[:12]
+        for line in (base / "packed-refs").read_text().splitlines():
+            if line.endswith(" " + ref):
+                return line.split()[0][:12]
+    except (OSError, IndexError):
+        return None
+    return None
+
+
 def run_tag(comm: MPI.Comm) -> dict[str, Any]:
     """Return the date, commit, machine and rank count the report is made with."""
     import datetime
     import os
     import platform
-    import subprocess
 
-    commit = "unknown"
-    try:
-        commit = subprocess.run(
-            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
-            capture_output=True,
-            text=True,
-            timeout=10,
-            check=True,
-        ).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        pass
+    commit = _commit(ROOT) or "unknown"
     memory = ""
     try:
         pages = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")

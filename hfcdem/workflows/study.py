@@ -216,11 +216,15 @@ def run_study(
     groups: int = 1,
     force: bool = False,
     say: Callable[[str], None] | None = None,
+    keep_stopped: bool = False,
 ) -> list[dict[str, Any]]:
-    """Run every case not already done; return one result row per case."""
+    """Run every case not already done; return one result row per case.
+
+    ``keep_stopped``: a case that stopped (its solver gave up) counts as done.
+    """
     say = say or (lambda msg: None)
     out = prepare_output_dir(output, comm)
-    run_cases(study, out, comm, groups=groups, force=force)
+    run_cases(study, out, comm, groups=groups, force=force, keep_stopped=keep_stopped)
     rows = case_rows(study, out)
     if comm.rank == 0:
         _write_results(out, study, rows)
@@ -236,11 +240,13 @@ def run_cases(
     groups: int = 1,
     force: bool = False,
     order: Sequence[int] | None = None,
+    keep_stopped: bool = False,
 ) -> None:
     """Run the cases of ``study`` into ``out/case_K_VALUE``, skipping those done (collective).
 
     ``order``: the case indices in the order to run them (default: as listed).
     ``groups``: run that many cases at once, the ranks split between them.
+    ``keep_stopped``: a case that stopped counts as done (else it runs again).
     """
     from hfcdem.workflows.run import run_scene, scene_fingerprint
 
@@ -254,7 +260,7 @@ def run_cases(
                 continue
             scene = study.case_scene(k)
             case_dir = out / case_directory(k, study.values[k])
-            if case_done(case_dir, scene_fingerprint(scene)) and not force:
+            if case_done(case_dir, scene_fingerprint(scene), keep_stopped) and not force:
                 if sub.rank == 0:
                     print(f"case {k}: done before, skipped", flush=True)
                 continue
@@ -288,14 +294,19 @@ def case_directory(k: int, value: Any) -> str:
     return f"case_{k}_{slug}" if slug else f"case_{k}"
 
 
-def case_done(case_dir: Path, fingerprint: str) -> bool:
-    """Whether ``case_dir`` holds a finished run of the scene with ``fingerprint``."""
+def case_done(case_dir: Path, fingerprint: str, keep_stopped: bool = False) -> bool:
+    """Whether ``case_dir`` holds a finished run of the scene with ``fingerprint``.
+
+    ``keep_stopped``: a run its solver stopped counts as finished too.
+    """
     try:
         run = json.loads((case_dir / "run.json").read_text())
         summary = json.loads((case_dir / "summary.json").read_text())
     except (OSError, json.JSONDecodeError):
         return False
-    return run.get("fingerprint") == fingerprint and summary.get("stopped") is None
+    return run.get("fingerprint") == fingerprint and (
+        keep_stopped or summary.get("stopped") is None
+    )
 
 
 STATIC_COLUMNS = [
