@@ -150,12 +150,24 @@ def borehole_limit(wet: bool) -> Callable[[CaseResult], list[Comparison]]:
         source = "Haimson-Fairhurst, eta = 0" if wet else "Hubbert-Willis 3 Sh - SH + T0"
         e = r.estimates["breakdown_pressure_MPa"]
         limit = e.get("limit")
-        return [
+        rows = [
             Comparison("first break, finest mesh", e["finest"], ref, "MPa", source,
                        error=e["error"], note=f"error estimate: {e['method']}"),
             Comparison("first break, extrapolated to h = 0", limit, ref, "MPa", source, 0.05,
                        note=f"observed order {e['order']:.2f}" if e.get("order") else e["method"]),
         ]  # fmt: skip
+        done = sorted(
+            (float(row["h_m"]), float(row["breakdown_pressure_MPa"]))
+            for row in r.rows
+            if row.get("h_m") and isinstance(row.get("breakdown_pressure_MPa"), int | float)
+        )
+        if len(done) >= 2 and math.isclose(done[1][0], 2.0 * done[0][0], rel_tol=1e-6):
+            rows.append(
+                Comparison("first break, first-order extrapolation", 2 * done[0][1] - done[1][1],
+                           ref, "MPa", source, note="2 P(h) - P(2h): assumes order 1, which "
+                           "the three meshes do not show")
+            )  # fmt: skip
+        return rows
 
     return compare
 
