@@ -24,6 +24,7 @@ LAYERS = [
     "io",
     "info",
     "workflows",
+    "reproduce",
     "cli",
     "__main__",
 ]

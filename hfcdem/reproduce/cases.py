@@ -16,8 +16,19 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from hfcdem import references
-from hfcdem.reproduce import compare
-from hfcdem.reproduce.compare import CaseResult, Comparison
+from hfcdem.reproduce.compare import (
+    CaseResult,
+    Comparison,
+    borehole_limit,
+    four_charges,
+    kgd,
+    lab_specimen,
+    paper_trend,
+    peak_against,
+    shape_study,
+    sneddon,
+    trend,
+)
 
 TIERS = ("quick", "full")
 FIDELITIES = ("scene", "uniform", "viscous", "seepage")
@@ -100,7 +111,7 @@ CASES: tuple[Case, ...] = (
         "scene",
         "meshes/scenes/sneddon_plate.toml",
         {"quick": Tier("coarse", estimate_s=5), "full": Tier(None, estimate_s=10)},
-        compare.sneddon,
+        sneddon,
         discretisation="DG2; README 'What is verified': -0.82 % (a/10) to -0.13 % (a/160) "
         "on a 50a plate; here the 1 m plate's own stiffness dominates",
         figures=("crack_opening.png",),
@@ -112,7 +123,7 @@ CASES: tuple[Case, ...] = (
         "scene",
         "meshes/scenes/kgd_strip.toml",
         {"quick": Tier("coarse", estimate_s=8), "full": Tier(None, estimate_s=20)},
-        compare.kgd,
+        kgd,
         discretisation="benchmarks/kgd_verification.py: dx 0.5 m on a 400 m plate: "
         "l -0.6 %, p +2.8 %, w -0.1 %",
         figures=("pressure.png",),
@@ -146,7 +157,7 @@ CASES: tuple[Case, ...] = (
             "quick": Tier(values=_BOREHOLE_H, estimate_s=60),
             "full": Tier(values=_BOREHOLE_H, estimate_s=60),
         },
-        compare.borehole_limit(wet=False),
+        borehole_limit(wet=False),
         figures=("convergence.png",),
     ),
     Case(
@@ -159,7 +170,7 @@ CASES: tuple[Case, ...] = (
             "quick": Tier(values=_BOREHOLE_H, estimate_s=80),
             "full": Tier(values=_BOREHOLE_H, estimate_s=80),
         },
-        compare.borehole_limit(wet=True),
+        borehole_limit(wet=True),
         figures=("convergence.png",),
     ),
     Case(
@@ -169,11 +180,9 @@ CASES: tuple[Case, ...] = (
         "study",
         "studies/borehole_seepage_stress_ratio.toml",
         {"quick": Tier("coarse", estimate_s=30), "full": Tier(None, estimate_s=90)},
-        compare.trend(
+        trend(
             "breakdown against Sh",
-            compare.paper_trend(
-                references.PFC2D_STRESS_RATIO, "Sh", 1e-6, "MPa", "sec. 4.1, 1e-5 m3/s"
-            ),
+            paper_trend(references.PFC2D_STRESS_RATIO, "Sh", 1e-6, "MPa", "sec. 4.1, 1e-5 m3/s"),
             True,
             1e-6,
             "MPa",
@@ -192,9 +201,9 @@ CASES: tuple[Case, ...] = (
             "quick": Tier("coarse", ("0.1 MPa/s", "3 MPa/s", "100 MPa/s"), estimate_s=25),
             "full": Tier(None, estimate_s=90),
         },
-        compare.trend(
+        trend(
             "breakdown against rate",
-            compare.paper_trend(references.PFC2D_RATE, "rate", 1.0, "m3/s", "sec. 4.2")
+            paper_trend(references.PFC2D_RATE, "rate", 1.0, "m3/s", "sec. 4.2")
             + "; DEM-LBM: rises (no values printed)",
             True,
             1e-6,
@@ -214,9 +223,9 @@ CASES: tuple[Case, ...] = (
             "quick": Tier("coarse", ("1 mPa.s", "1 Pa.s", "10 Pa.s"), estimate_s=25),
             "full": Tier(None, estimate_s=90),
         },
-        compare.trend(
+        trend(
             "breakdown against viscosity",
-            compare.paper_trend(references.PFC2D_VISCOSITY, "viscosity", 1.0, "Pa s", "sec. 4.3")
+            paper_trend(references.PFC2D_VISCOSITY, "viscosity", 1.0, "Pa s", "sec. 4.3")
             + "; DEM-LBM: rises (no values printed)",
             True,
             1.0,
@@ -234,7 +243,7 @@ CASES: tuple[Case, ...] = (
             "quick": Tier("coarse", ("1 um", "5 um", "20 um"), estimate_s=25),
             "full": Tier(None, estimate_s=90),
         },
-        compare.trend(
+        trend(
             "breakdown against permeability",
             "falls as permeability rises (sec. 3.5; no values printed)",
             False,
@@ -250,7 +259,7 @@ CASES: tuple[Case, ...] = (
         "study",
         "studies/borehole_seepage_weibull.toml",
         {"full": Tier(None, estimate_s=90)},
-        compare.trend(
+        trend(
             "breakdown against Weibull m",
             "rises as the rock gets more homogeneous, larger m (sec. 3.4; no values printed)",
             True,
@@ -266,7 +275,7 @@ CASES: tuple[Case, ...] = (
         "study",
         "studies/lab_azimuth.toml",
         {"quick": Tier("coarse", estimate_s=400), "full": Tier("coarse", estimate_s=400)},
-        compare.lab_specimen,
+        lab_specimen,
         discretisation="not measured at this resolution (coarse, 2 mm at the perforations)",
         note="dry joints, as the scene files say (a calibration choice, see the README)",
         figures=("study.png",),
@@ -278,7 +287,7 @@ CASES: tuple[Case, ...] = (
         "scene",
         "meshes/scenes/perforation_no2.toml",
         {"quick": Tier("coarse", estimate_s=200), "full": Tier("coarse", estimate_s=200)},
-        compare.peak_against(
+        peak_against(
             "breakdown (peak pressure)",
             references.CHARGES["no2"],
             "the paper's CDEM (Fig. 15)",
@@ -296,7 +305,7 @@ CASES: tuple[Case, ...] = (
         "study",
         "studies/four_charges.toml",
         {"full": Tier("coarse", estimate_s=900)},
-        compare.four_charges,
+        four_charges,
         discretisation="as No. 2 (coarse)",
         figures=("study.png",),
     ),
@@ -307,7 +316,7 @@ CASES: tuple[Case, ...] = (
         "study",
         "studies/shape_study.toml",
         {"full": Tier("coarse", estimate_s=2400)},
-        compare.shape_study,
+        shape_study,
         discretisation="as No. 2 (coarse)",
         figures=("study.png",),
     ),
@@ -318,7 +327,7 @@ CASES: tuple[Case, ...] = (
         "scene",
         "meshes/scenes/field_cluster.toml",
         {"full": Tier("coarse", estimate_s=3300)},
-        compare.peak_against(
+        peak_against(
             "breakdown (peak pressure)",
             references.FIELD_MEASURED,
             "measured in the field",
