@@ -120,3 +120,15 @@ def test_comparison_rows_judge_gaps_and_trends(tmp_path):
     rows = ({"x": 1, "breakdown_pressure_MPa": 10.0}, {"x": 2, "breakdown_pressure_MPa": None})
     (lonely,) = trend("b", "rises", True, 1.0, "")(CaseResult(tmp_path, (), rows=rows))
     assert lonely.met is False and "fewer than two" in lonely.note
+
+
+@pytest.mark.serial
+def test_time_left_scales_with_the_cases_done_once_a_minute_has_run():
+    from hfcdem.reproduce.runner import _Clock
+
+    clock = _Clock(spent=3.0, estimated=1.0, left=[100.0, 200.0])
+    assert clock.remaining() == pytest.approx(300.0)  # one short case: no scaling
+    clock = _Clock(spent=180.0, estimated=90.0, left=[100.0, 200.0])
+    assert clock.remaining() == pytest.approx(600.0)  # twice as slow as estimated
+    clock = _Clock(spent=900.0, estimated=90.0, left=[100.0])
+    assert clock.remaining() == pytest.approx(300.0)  # at most 3x

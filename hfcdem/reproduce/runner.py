@@ -60,7 +60,11 @@ class _Clock:
     left: list[float] = field(default_factory=list)
 
     def remaining(self) -> float:
-        scale = self.spent / self.estimated if self.estimated > 0 and self.spent > 0 else 1.0
+        # a few seconds of short cases say little about the long ones: scale only once
+        # a minute of estimates has run, and by no more than 3x either way
+        scale = 1.0
+        if self.estimated >= 60.0 and self.spent > 0.0:
+            scale = min(max(self.spent / self.estimated, 1.0 / 3.0), 3.0)
         return scale * sum(self.left)
 
 
