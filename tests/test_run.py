@@ -113,6 +113,30 @@ def test_another_scenes_results_are_kept_without_force(shared_tmp_path):
     assert json.loads((out / "run.json").read_text())["resolution"] == "coarse"
 
 
+class Interrupt(StepObserver):
+    """Stop a run at its first step, as Ctrl-C would."""
+
+    def step(self, frac, rec):
+        raise KeyboardInterrupt
+
+
+def test_a_forced_run_that_stops_leaves_no_other_runs_summary(shared_tmp_path):
+    from hfcdem.workflows.run import scene_fingerprint
+    from hfcdem.workflows.study import case_done
+
+    out = shared_tmp_path / "kgd_forced"
+    coarse = load_scene(KGD, "coarse")
+    run_scene(coarse, out)
+    assert case_done(out, scene_fingerprint(coarse))
+    other = load_scene(KGD)
+    with pytest.raises(KeyboardInterrupt):
+        run_scene(other, out, force=True, observers=[Interrupt()])
+    # run.json names the new run; the coarse run's answers are gone, not passed off as its
+    assert not (out / "summary.json").exists()
+    assert not case_done(out, scene_fingerprint(other))
+    assert not case_done(out, scene_fingerprint(coarse))
+
+
 def test_a_scene_without_physics_is_refused_before_meshing(shared_tmp_path):
     scene = parse_scene({"geometry": {"catalogue": "crack_plate"}})
     with pytest.raises(SceneError, match=r"\[rock\]"):

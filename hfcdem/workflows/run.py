@@ -204,6 +204,9 @@ def run_scene(
     out = prepare_output_dir(out, comm)
     phys = scene.physics
     _write_run_record(out, scene, comm)
+    if not resume and comm.rank == 0:  # another run's answers must not pass for this one's
+        (out / "summary.json").unlink(missing_ok=True)
+    comm.barrier()
     if phys.defaulted:
         say("defaults: " + ", ".join(phys.defaulted))
     sm = create_scene_mesh(scene, comm)
@@ -221,6 +224,7 @@ def run_scene(
     def record() -> dict[str, Any]:
         """Summary entries every run has: mesh, machine, versions, the scene as run."""
         return {
+            "fingerprint": scene_fingerprint(scene),
             "cells": cells,
             "unknowns": dofs,
             "ranks": comm.size,

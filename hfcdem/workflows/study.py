@@ -304,8 +304,10 @@ def case_done(case_dir: Path, fingerprint: str, keep_stopped: bool = False) -> b
         summary = json.loads((case_dir / "summary.json").read_text())
     except (OSError, json.JSONDecodeError):
         return False
-    return run.get("fingerprint") == fingerprint and (
-        keep_stopped or summary.get("stopped") is None
+    return (
+        run.get("fingerprint") == fingerprint
+        and summary.get("fingerprint", fingerprint) == fingerprint
+        and (keep_stopped or summary.get("stopped") is None)
     )
 
 
