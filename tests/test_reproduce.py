@@ -63,7 +63,7 @@ def test_a_failing_case_is_reported_and_the_report_still_written(shared_tmp_path
     argv = ["reproduce", "--quick", "--only", "sneddon", "--resolution", "nosuch", "-o", str(out)]
     assert main(argv) == 4
     (row,) = _rows(out / "results.csv")
-    assert row["status"] == "failed" and "nosuch" in row["note"]
+    assert row["status"] == "failed" and "nosuch" in row["case_note"]
     if MPI.COMM_WORLD.rank == 0:
         assert "sneddon" in capsys.readouterr().err
 

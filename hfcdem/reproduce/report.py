@@ -38,6 +38,7 @@ COLUMNS = (
     "wall_time_s",
     "status",
     "note",
+    "case_note",
 )
 
 
@@ -62,7 +63,7 @@ def _rows(records: Sequence[CaseRecord]) -> list[dict[str, str]]:
                 "resolution": r.resolution,
                 "wall_time_s": f"{r.wall_time_s:.1f}",
                 "status": r.status,
-                "note": "; ".join(x for x in (r.message, r.note) if x),
+                "case_note": "; ".join(x for x in (r.message, r.note) if x),
             }
             if c is not None:
                 row |= {
@@ -75,7 +76,7 @@ def _rows(records: Sequence[CaseRecord]) -> list[dict[str, str]]:
                     "met": _met(c),
                     "estimated_error": _num(c.error, 3),
                     "source": c.source,
-                    "note": "; ".join(x for x in (c.note, row["note"]) if x),
+                    "note": c.note,
                 }
             rows.append({k: row.get(k, "") for k in COLUMNS})
     return rows
@@ -87,8 +88,8 @@ def _counts(records: Sequence[CaseRecord]) -> dict[str, int]:
         "met": sum(1 for c in every if c.met is True),
         "not met": sum(1 for c in every if c.met is False),
         "not judged": sum(1 for c in every if c.met is None),
-        "cases failed": sum(1 for r in records if r.status in ("failed", "stopped")),
-        "not modelled": sum(1 for r in records if r.status == "not modelled"),
+        "cases failed or stopped": sum(1 for r in records if r.status in ("failed", "stopped")),
+        "cases not modelled": sum(1 for r in records if r.status == "not modelled"),
     }
 
 
@@ -162,7 +163,7 @@ def _header(meta: Mapping[str, Any], records: Sequence[CaseRecord]) -> list[str]
         f"{meta['ranks']} rank(s); tier {meta['tier']}, fidelity {meta['fidelity']}"
         + (f", every case at resolution {meta['resolution']}" if meta.get("resolution") else "")
         + f"; {total / 60:.1f} min of case wall time.",
-        "Rows: " + ", ".join(f"{v} {k}" for k, v in counts.items()) + ".",
+        "Rows: " + ", ".join(f"{k}: {v}" for k, v in counts.items()) + ".",
         "A gap is ours relative to the reference. A row with a target is judged; a "
         "trend or ordering row is met when ours goes the paper's way. The resolution is "
         "the element size at the cavity or crack; the estimated error is the case's own "

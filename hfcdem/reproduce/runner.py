@@ -207,8 +207,10 @@ def _replace(record: CaseRecord, **changes: Any) -> CaseRecord:
 
 
 def _stops(result: CaseResult) -> list[str]:
-    runs = [result.summary] if result.summary else list(result.rows)
-    return [str(r.get("stopped")) for r in runs if r.get("stopped")]
+    if result.summary:
+        stopped = result.summary.get("stopped")
+        return [str(stopped)] if stopped else []
+    return [f"{r.get('value')}: {r['stopped']}" for r in result.rows if r.get("stopped")]
 
 
 def _execute(
