@@ -266,11 +266,15 @@ def _execute(
     if tier.fixed:
         conv = conv.with_fixed(dict(tier.fixed))
     scenes = tuple(conv.case_scene(k) for k in range(len(conv.values)))
+    skipped = not force and all(
+        case_done(where / d, scene_fingerprint(s))
+        for d, s in zip(_case_dirs(conv), scenes, strict=True)
+    )
     result = converge(conv, where, comm, force=force, say=say)
     sizes = sorted(characteristic_size(s) * 1e3 for s in scenes)
     text = f"h = {sizes[-1]:.4g} -> {sizes[0]:.4g} mm ({len(sizes)} meshes)"
     estimates = {k: asdict(e) for k, e in result.estimates.items()}
-    return CaseResult(where, scenes, rows=result.rows, estimates=estimates), text, False
+    return CaseResult(where, scenes, rows=result.rows, estimates=estimates), text, skipped
 
 
 def _case_dirs(study: Any) -> list[str]:
