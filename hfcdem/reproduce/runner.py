@@ -143,7 +143,7 @@ def _estimate(case: Case, tier: Tier, out: Path, ranks: int) -> float:
         return tier.estimate_s / max(1.0, 0.7 * ranks) if case.kind != "missing" else 0.0
 
 
-def _overrides(case: Case, fidelity: str) -> dict[str, Any]:
+def _overrides(fidelity: str) -> dict[str, Any]:
     if fidelity == "scene":
         return {}
     if fidelity == "seepage":
@@ -235,9 +235,7 @@ def _execute(
     if case.kind == "scene":
         scene = load_scene(path, resolution, overrides=dict(tier.fixed))
         if scene.physics.injection is not None and fidelity != "scene":
-            scene = load_scene(
-                path, resolution, overrides={**tier.fixed, **_overrides(case, fidelity)}
-            )
+            scene = load_scene(path, resolution, overrides={**tier.fixed, **_overrides(fidelity)})
         skipped = case_done(where, scene_fingerprint(scene), keep_stopped=True) and not force
         if skipped:
             summary = json.loads((where / "summary.json").read_text())
@@ -251,12 +249,9 @@ def _execute(
             study = study.with_values(tier.values)
         study = study.with_fixed(dict(tier.fixed))
         if fidelity != "scene" and study.case_scene(0).physics.injection is not None:
-            study = study.with_fixed(_overrides(case, fidelity))
+            study = study.with_fixed(_overrides(fidelity))
         scenes = tuple(study.case_scene(k) for k in range(len(study.values)))
-        skipped = not force and all(
-            case_done(where / d, scene_fingerprint(s), keep_stopped=True)
-            for d, s in zip(_case_dirs(study), scenes, strict=True)
-        )
+        skipped = not force and _all_done(study, scenes, where, keep_stopped=True)
         rows = run_study(study, where, comm, force=force, say=say, keep_stopped=True)
         text = _size_text(characteristic_size(scenes[0]), study.resolution, rows[0].get("cells"))
         return CaseResult(where, scenes, rows=tuple(rows)), text, skipped
@@ -266,10 +261,7 @@ def _execute(
     if tier.fixed:
         conv = conv.with_fixed(dict(tier.fixed))
     scenes = tuple(conv.case_scene(k) for k in range(len(conv.values)))
-    skipped = not force and all(
-        case_done(where / d, scene_fingerprint(s))
-        for d, s in zip(_case_dirs(conv), scenes, strict=True)
-    )
+    skipped = not force and _all_done(conv, scenes, where, keep_stopped=False)
     result = converge(conv, where, comm, force=force, say=say)
     sizes = sorted(characteristic_size(s) * 1e3 for s in scenes)
     text = f"h = {sizes[-1]:.4g} -> {sizes[0]:.4g} mm ({len(sizes)} meshes)"
@@ -277,10 +269,15 @@ def _execute(
     return CaseResult(where, scenes, rows=result.rows, estimates=estimates), text, skipped
 
 
-def _case_dirs(study: Any) -> list[str]:
-    from hfcdem.workflows.study import case_directory
+def _all_done(study: Any, scenes: Sequence[Any], where: Path, keep_stopped: bool) -> bool:
+    """Whether every case of a study already finished in ``where`` (so nothing runs)."""
+    from hfcdem.workflows.run import scene_fingerprint
+    from hfcdem.workflows.study import case_directory, case_done
 
-    return [case_directory(k, v) for k, v in enumerate(study.values)]
+    return all(
+        case_done(where / case_directory(k, v), scene_fingerprint(s), keep_stopped)
+        for (k, v), s in zip(enumerate(study.values), scenes, strict=True)
+    )
 
 
 def _size_text(h: float, resolution: str | None, cells: Any) -> str:
