@@ -7,6 +7,7 @@ from mpi4py import MPI
 from hfcdem.config.materials import Fluid
 from hfcdem.flow.balance import (
     APERTURE_FLOOR,
+    ROUNDOFF,
     GroupBalance,
     VoidVolumes,
     gravity_drive,
@@ -25,13 +26,14 @@ def _line():
     return net
 
 
-def _balance(group, v0=(1e-4, 2e-4), rate=True, fluid=None):
+def _balance(group, v0=(1e-4, 2e-4), rate=True, fluid=None, h=None, lag=False):
     net = _line()
     fluid = fluid or Fluid(viscosity=1e-3, bulk_modulus=KW)
     m = 1 + max(int(max(group)), 0)
-    volumes = VoidVolumes(np.array(v0), np.zeros((2, m)), 1e-3, np.zeros(m))
+    h = np.zeros((2, m)) if h is None else np.asarray(h)
+    volumes = VoidVolumes(np.array(v0), h, 1e-3, np.zeros(m))
     drive = gravity_drive(net, fluid, np.zeros(3))
-    return GroupBalance(net, fluid, volumes, np.array(group), drive, 1e-3, rate)
+    return GroupBalance(net, fluid, volumes, np.array(group), drive, 1e-3, rate, lag=lag)
 
 
 def _trans(balance, vf):
@@ -146,10 +148,53 @@ def test_a_dry_facet_gains_what_flows_in_and_fills():
     assert not held.any()  # filled during this step: suction allowed until it ends
 
 
+def test_a_lagging_group_holds_its_fluid_at_zero_pressure():
+    """Water carries no tension: less fluid than void is a part-full group at p = 0."""
+    kw = 10e6
+    fluid = Fluid(viscosity=1e-3, bulk_modulus=kw)
+    h = [[1e-11], [0.0]]  # facet 0 opens 1e-11 m^3/Pa under its group's pressure
+    lag = _balance([0, -1], v0=(1e-4, 1e-8), fluid=fluid, h=h, lag=True)
+    held = 0.5 * (1e-4 + 1e-3)  # half of what the cavity and facet 0 hold at zero pressure
+
+    def r(q):
+        return lag.residual(np.array([q]), 1.0, 0.0, np.zeros(2), np.array([0.0, 0.0]), held)
+
+    q = kw * (held / (1e-4 + 1e-3) - 1.0)  # V (1 + q / Kw) = held with V at zero load
+    assert q == pytest.approx(-0.5 * kw)
+    assert abs(r(q)[0]) < 1e-18
+    assert lag.load(np.array([q, 2e6])).tolist() == [0.0, 2e6]
+    # the faces see no pressure: the void is the zero-load void, whatever q
+    _, sat = lag.fluxes(np.array([q]), lag.volumes.at(lag.load(np.array([q])))[0], np.zeros(2))
+    assert sat[0] == pytest.approx(0.5)
+    # the residual is monotone through q = 0 (one root), unlike V(q) (1 + q / Kw) with suction
+    qs = np.linspace(-0.9 * kw, 0.5 * kw, 57)
+    assert np.all(np.diff([r(x)[0] for x in qs]) > 0.0)
+    suction = _balance([0, -1], v0=(1e-4, 1e-8), fluid=fluid, h=h)  # lag off: the zero-lag rung
+    assert suction.load(np.array([q])).tolist() == [q]
+    with_suction = suction.residual(
+        np.array([q]), 1.0, 0.0, np.zeros(2), np.array([0.0, 0.0]), held
+    )
+    assert with_suction[0] != pytest.approx(r(q)[0])  # the faces pulled in by the suction
+
+
 def test_tolerance_scales_with_the_fluid_held():
     bal = _balance([1, 2])
     tol = bal.tolerance(np.array([1e-4, 2e-4]), 1e-3, 5e-6, 1e-8)
     assert tol == pytest.approx(1e-8 * (1e-3 + 3e-4 + 5e-6), rel=1e-14)
+
+
+def test_tolerance_has_the_round_off_floor_of_the_voids():
+    """Voids far above the fluid held: the residual cannot resolve 1e-10 of the fluid."""
+    bal = _balance([1, 2], v0=(50.0, -49.0))  # a detached block: one face open, one overlapping
+    content = np.array([1e-9, 1e-9])
+    p = np.zeros(3)
+    plain = bal.tolerance(content, 1e-9, 0.0, 1e-10)
+    assert plain == pytest.approx(1e-10 * 3e-9)
+    floored = bal.tolerance(content, 1e-9, 0.0, 1e-10, p)
+    assert floored == pytest.approx(ROUNDOFF * (50.0 + 49.0 + 1e-3), rel=1e-12)
+    # the floor is the size of the round-off of the residual's sum, not above it by decades
+    r = bal.residual(p, 1.0, 0.0, np.zeros(2), content, 1e-9)
+    assert floored < 1e-11 and abs(r.sum()) > 1.0
 
 
 def test_gravity_drives_along_the_pairs():

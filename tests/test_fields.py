@@ -29,6 +29,9 @@ def _line(n=3):
 def test_saturation_and_apertures():
     sat = saturation(np.array([True, False, False]), np.array([0.0, 1.0, 3.0]), np.full(3, 2.0))
     assert sat.tolist() == [1.0, 0.5, 1.0]  # wet: 1; dry: content / volume, at most 1
+    wet = np.array([True, True, True])
+    lagging = saturation(wet, np.array([2.2, 1.5, 0.0]), np.array([2.0, 2.0, 0.0]), lag=True)
+    assert lagging.tolist() == [1.0, 0.75, 1.0]  # full; behind its opening; closed counts as full
     w = apertures(np.array([2e-3, 0.5e-3, -1e-3]), np.array([1.0, 1.0, 1.0]), 1e-3)
     assert w == pytest.approx([2e-3, 1e-3, 1e-3])  # never below the residual aperture
 

@@ -156,13 +156,15 @@ def _borehole(
     size: float = A / 10,
     rigid: bool = False,
     permeate: bool = False,
+    sh_max: float = 20e6,
+    flow: dict | None = None,
     **fluid,
 ):
     tmesh = _borehole_mesh(size)
     solid = CDEMSolid(
         tmesh,
         ElasticMaterial(20e9, 0.25),
-        InSituStress(sh_max=20e6, sh_min=sh_min, sv=20e6),
+        InSituStress(sh_max=sh_max, sh_min=sh_min, sv=20e6),
         InterfaceModel(
             alpha=100, tensile_strength=5e6, cohesion=60e6, friction_angle=30, break_rule="all"
         ),
@@ -183,6 +185,7 @@ def _borehole(
             wet_wall_joints=wet,
             rigid_cavity=rigid,
             permeate_joints=permeate,
+            **(flow or {}),
         ),
     )
 

@@ -17,9 +17,19 @@ from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
 
 
-def saturation(wet: np.ndarray, content: np.ndarray, volumes: np.ndarray) -> np.ndarray:
-    """Saturation of every facet: 1 where wet, else content / void volume in [0, 1]."""
-    return np.where(wet, 1.0, np.clip(content / np.maximum(volumes, 1e-300), 0.0, 1.0))
+def saturation(
+    wet: np.ndarray, content: np.ndarray, volumes: np.ndarray, lag: bool = False
+) -> np.ndarray:
+    """Saturation of every facet: 1 where wet, else content / void volume in [0, 1].
+
+    With ``lag`` (groups may lag behind their opening, see
+    :class:`~hfcdem.flow.balance.GroupBalance`) an open wet facet is also
+    content / void: below 1 when its group holds less than its void.
+    """
+    frac = np.clip(content / np.maximum(volumes, 1e-300), 0.0, 1.0)
+    if lag:
+        return np.where(wet & (volumes <= 0.0), 1.0, frac)
+    return np.where(wet, 1.0, frac)
 
 
 def apertures(volumes: np.ndarray, area: np.ndarray, residual: float) -> np.ndarray:

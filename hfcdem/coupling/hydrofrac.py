@@ -57,7 +57,12 @@ from hfcdem.coupling.groups import (
 from hfcdem.coupling.records import SimulationStopped, StepRecord
 from hfcdem.coupling.settings import FlowSettings
 from hfcdem.coupling.stepping import StepController
-from hfcdem.flow.balance import GroupBalance, VoidVolumes, gravity_drive, relative_permeability
+from hfcdem.flow.balance import (
+    GroupBalance,
+    VoidVolumes,
+    gravity_drive,
+    relative_permeability,
+)
 from hfcdem.flow.newton import solve_groups
 from hfcdem.io.files import write_csv
 from hfcdem.solid.cdem import CDEMSolid
@@ -243,6 +248,8 @@ class HydraulicFracture:
             drive,
             self.cavity_volume,
             self.injection.rate_controlled,
+            # no suction where the fluid may lag (zero-lag KGD keeps its tip suction)
+            lag=s.fidelity == "uniform" or s.filling == "saturation",
         )
         self.rebuilds += 1
         self.rebuild_causes[cause] += 1
@@ -255,7 +262,9 @@ class HydraulicFracture:
     ) -> tuple[np.ndarray, int, bool]:
         """Solve the group equations; returns pressures, iterations, converged."""
         s = self.settings
-        atol = self.balance.tolerance(self.content, self.cavity_content, source, s.newton_tolerance)
+        atol = self.balance.tolerance(
+            self.content, self.cavity_content, source, s.newton_tolerance, guess
+        )
 
         def residual(p: np.ndarray, frozen: np.ndarray | None) -> np.ndarray:
             return self.balance.residual(
@@ -293,7 +302,8 @@ class HydraulicFracture:
         p = self.op.volumes.filling_pressure(wet, held)
         return np.full(self.m, self.p_cavity if p is None else max(p, self.p_cavity))
 
-    def _set_displacement(self, p: np.ndarray) -> Loads:
+    def _set_displacement(self, q: np.ndarray) -> Loads:
+        p = self.balance.load(q)  # a lagging group (q < 0) loads its faces with nothing
         self.op.displacement(self.solid.u, p)
         pf = self.balance.facet_pressure(p)
         local = np.zeros(self.solid.num_facets)
@@ -383,7 +393,8 @@ class HydraulicFracture:
             # accuracy control: the cavity pressure may move by at most max_pressure_change
             # (relative, at least 1 MPa wide) per step, or the step is retried shorter
             if iteration == 0 and self.history:
-                shorter = self.stepper.pressure_cut(dt, self.p_cavity, float(p[0]))
+                p_new = float(self.balance.load(p)[0])
+                shorter = self.stepper.pressure_cut(dt, self.p_cavity, p_new)
                 if shorter is not None:
                     return shorter
             if self._drain_and_fill(p, dt, t1):
@@ -400,7 +411,7 @@ class HydraulicFracture:
                 changed_states = True
                 self._recondense("band")
                 continue
-            self._trial_pressure = self.balance.facet_pressure(p)
+            self._trial_pressure = self.balance.facet_pressure(self.balance.load(p))
             ratio, mode = solid.overstress(loads)
             ratio = np.where(self._eligible(), ratio, 0.0)
             worst = float(self.comm.allreduce(float(ratio.max(initial=0.0)), op=MPI.MAX))
@@ -500,12 +511,22 @@ class HydraulicFracture:
         """
         wet = self.group >= 0
         after = self.balance.advance(p, dt, source, leak, self.content, self.cavity_content)
+        if after.cavity_content < 0.0:
+            # the walls moved in by more than the cavity holds: blocks come loose from the
+            # wall and travel into the tunnel, where nothing holds them (residual springs
+            # only); the small-displacement solid has no answer past this state
+            raise SimulationStopped(
+                f"at t = {t1:.6g} s the cavity walls moved inward by more than the cavity's "
+                f"volume ({after.cavity_content:.3g} m^3 left): blocks that came loose from "
+                "the wall move into the cavity, beyond what the small-displacement solid "
+                f"represents; the history up to t = {self.t:.6g} s stands"
+            )
         vf = after.facet_volumes
         self.volume_mismatch = after.mismatch
         self.content = after.content
         self.cavity_content = after.cavity_content
         self.pressure = after.pressure
-        self.p_cavity = float(p[0])
+        self.p_cavity = float(self.balance.load(p)[0])
         self.injected += after.injected
         self.leaked += float(leak.sum())
         # dry facets that filled up turn wet
@@ -602,7 +623,8 @@ class HydraulicFracture:
         return vf
 
     def _saturation(self) -> np.ndarray:
-        return fields.saturation(self.wet, self.content, self._last_volumes())
+        lag = self.balance.lag
+        return fields.saturation(self.wet, self.content, self._last_volumes(), lag)
 
     def wet_extent(self, origin: Sequence[float], direction: Sequence[float]) -> float:
         """Return the fluid front along ``direction`` from ``origin`` (m)."""

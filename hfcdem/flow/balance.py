@@ -12,6 +12,15 @@ condensed solid) and fluxes by the cubic law on the
 pressure with saturation ``S = M / V``; its neighbours feed it through the
 relative permeability ``S^2 (3 - 2S)``.  Pressures may be ``(m,)`` or a batch
 ``(m, k)`` (columns of a finite-difference Jacobian).
+
+With ``lag`` (uniform rung, saturation filling), water carries no tension: a group's unknown
+``q`` below zero is a group whose void has grown past its fluid (fluid lag, as
+cracks that open faster than the pump fills them).  It then holds
+``V (1 + q / Kw)`` at zero pressure, saturation ``1 + q / Kw``, and the faces
+and fluxes see ``max(q, 0)`` (seed eqs. (18)-(19), the joints' saturation
+filling, applied to the groups).  Without it a group may hold suction: the
+zero-lag viscous solutions (KGD) that the viscous rung is verified against
+carry it near the tip.
 """
 
 from __future__ import annotations
@@ -25,6 +34,9 @@ from hfcdem.flow.network import Network
 
 #: a floor on storage and aperture keeps a closed, dry facet's equations regular (m)
 APERTURE_FLOOR = 1e-9
+
+#: round-off of a residual relative to the void volumes it sums (64 machine epsilons)
+ROUNDOFF = 64.0 * float(np.finfo(float).eps)
 
 
 def relative_permeability(saturation: np.ndarray) -> np.ndarray:
@@ -97,6 +109,7 @@ class GroupBalance:
     drive: np.ndarray  # (P,) gravity head per connection (:func:`gravity_drive`)
     cavity_volume: float  # the cavity's storage (m^3)
     rate_controlled: bool  # injection by rate (else the cavity pressure is prescribed)
+    lag: bool = False  # groups may lag behind their opening (no suction, see the module)
 
     def __post_init__(self) -> None:
         if len(self.group) != self.net.size:
@@ -107,6 +120,10 @@ class GroupBalance:
         """Number of pressure groups (the cavity's group 0 always counts)."""
         group = self.group
         return 1 + (int(group.max()) if group.size and group.max() > 0 else 0)
+
+    def load(self, q: np.ndarray) -> np.ndarray:
+        """Pressure on the faces for group unknowns ``q`` (with ``lag``: no tension)."""
+        return np.maximum(q, 0.0) if self.lag else q
 
     def facet_pressure(self, p: np.ndarray) -> np.ndarray:
         """Pressure of every facet (dry facets 0) for group pressures (m,) or (m, k)."""
@@ -129,16 +146,17 @@ class GroupBalance:
         """
         net, fl = self.net, self.fluid
         if frozen is not None:
-            vf_k, _ = self.volumes.at(frozen)
+            vf_k, _ = self.volumes.at(self.load(frozen))
             vf = col(vf_k, p) * np.ones((1,) * p.ndim)
         area = net.area.reshape(-1, *([1] * (p.ndim - 1)))
         aperture = np.maximum(vf / area - fl.residual_aperture, 0.0) + max(
             fl.residual_aperture, APERTURE_FLOOR
         )
         trans = net.transmissibility(aperture, fl.conductivity)
-        pf = self.facet_pressure(p)
-        pc = p[0]
-        sat = np.ones_like(vf)
+        q = self.facet_pressure(p)
+        pf = self.load(q)
+        pc = self.load(p[0])
+        sat = np.clip(1.0 + q / fl.bulk_modulus, 0.0, 1.0) if self.lag else np.ones_like(vf)
         dry = self.group < 0
         sat[dry] = np.clip(
             content[dry].reshape(-1, *([1] * (p.ndim - 1))) / np.maximum(vf[dry], 1e-300),
@@ -173,7 +191,7 @@ class GroupBalance:
         residual linear in ``p`` (a Picard step).
         """
         kw = self.fluid.bulk_modulus
-        vf, vc = self.volumes.at(p)
+        vf, vc = self.volumes.at(self.load(p))
         flux, _ = self.fluxes(p, vf, content, frozen)
         pf = self.facet_pressure(p)
         r = np.zeros(p.shape)
@@ -184,7 +202,7 @@ class GroupBalance:
             stored = vf + np.maximum(vf, floor) * pf / kw
             cav_stored = vc + np.maximum(vc, 0.0) * p[0] / kw
         else:
-            vf_k, vc_k = self.volumes.at(frozen)
+            vf_k, vc_k = self.volumes.at(self.load(frozen))
             floor_k = np.maximum(vf_k, self.net.area * APERTURE_FLOOR)
             stored = vf + col(floor_k, p) * pf / kw
             cav_stored = vc + max(float(vc_k), 0.0) * p[0] / kw
@@ -206,15 +224,31 @@ class GroupBalance:
         return r
 
     def tolerance(
-        self, content: np.ndarray, cavity_content: float, source: float, relative: float
+        self,
+        content: np.ndarray,
+        cavity_content: float,
+        source: float,
+        relative: float,
+        p: np.ndarray | None = None,
     ) -> float:
-        """Absolute residual tolerance: ``relative`` times the fluid held (m^3)."""
+        """Absolute residual tolerance: ``relative`` times the fluid held (m^3).
+
+        With group pressures ``p``, at least the round-off of the residual's sum
+        of void volumes there: where open faces of detached blocks hold voids far
+        above the fluid (up to 1e10 of it seen), the fluid held is below what the
+        residual can resolve.  The books stay exact (:meth:`advance`).
+        """
         scale = max(
             cavity_content + float(content.sum()) + abs(source if self.rate_controlled else 0.0),
             float(self.net.area.sum()) * APERTURE_FLOOR,
             1e-30,
         )
-        return relative * scale
+        floor = 0.0
+        if p is not None:
+            vf, vc = self.volumes.at(self.load(p))
+            voids = float(np.abs(vf[self.group >= 0]).sum()) + abs(float(vc))
+            floor = ROUNDOFF * voids
+        return max(relative * scale, floor)
 
     def dry_gain(self, p: np.ndarray, vf: np.ndarray, content: np.ndarray, dt: float) -> np.ndarray:
         """Volume each facet receives over the step from its connections (dry ones keep it)."""
@@ -236,7 +270,7 @@ class GroupBalance:
         the wet set at once, so the front is not limited to one facet per step.
         """
         drained = (self.group > 0) & (self.facet_pressure(p) < 0.0) & may_drain
-        vf, _ = self.volumes.at(p)
+        vf, _ = self.volumes.at(self.load(p))
         gain = self.dry_gain(p, vf, content, dt)
         full = (self.group < 0) & (gain > 0.0) & (content + gain >= vf)
         return drained, full
@@ -257,7 +291,7 @@ class GroupBalance:
         reported as the mismatch and corrected by the next step.
         """
         kw = self.fluid.bulk_modulus
-        vf, vc = self.volumes.at(p)
+        vf, vc = self.volumes.at(self.load(p))
         pf = self.facet_pressure(p)
         wet = self.group >= 0
         gain = self.dry_gain(p, vf, content, dt)
@@ -282,7 +316,7 @@ class GroupBalance:
         return StepBalance(
             content=np.where(wet, stored * factor[np.maximum(self.group, 0)], content + gain),
             cavity_content=cav_stored * float(factor[0]),
-            pressure=np.where(wet, pf, 0.0),
+            pressure=np.where(wet, self.load(pf), 0.0),
             injected=injected,
             mismatch=float(np.sum(np.abs(resid))),
             facet_volumes=vf,
@@ -291,6 +325,7 @@ class GroupBalance:
 
 __all__ = [
     "APERTURE_FLOOR",
+    "ROUNDOFF",
     "GroupBalance",
     "StepBalance",
     "VoidVolumes",
