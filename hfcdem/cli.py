@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -377,6 +378,7 @@ def _reproduce(args: argparse.Namespace) -> int:
             only=only,
             force=args.force,
             say=say,
+            watchdog_s=60.0 * args.watchdog,
         )
     except ValueError as exc:
         say(f"error: {exc}", err=True)
@@ -402,6 +404,16 @@ def _reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
+def _minutes_arg(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0.0):
+        raise argparse.ArgumentTypeError(f"expected minutes >= 0 (0: never), got {text!r}")
+    return value
+
+
 def _add_reproduce(sub: Any) -> None:
     rep = sub.add_parser(
         "reproduce",
@@ -423,6 +435,14 @@ def _add_reproduce(sub: Any) -> None:
     rep.add_argument("--resolution", metavar="NAME", help="a named mesh resolution for every case")
     rep.add_argument("--only", metavar="A,B", help="run only these cases (names in the report)")
     rep.add_argument("--force", action="store_true", help="run again the cases already done")
+    rep.add_argument(
+        "--watchdog",
+        type=_minutes_arg,
+        default=30.0,
+        metavar="MIN",
+        help="end the run (exit 5) when no progress line comes for MIN minutes "
+        "(default 30; 0: never); cases done are kept",
+    )
     rep.add_argument(
         "--readme",
         metavar="FILE",

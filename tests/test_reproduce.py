@@ -77,6 +77,9 @@ def test_bad_choices_name_the_option(shared_tmp_path):
         select_cases("slow")
     with pytest.raises(SystemExit):
         main(["reproduce", "-o", str(shared_tmp_path), "--fidelity", "exact"])
+    for minutes in ("-1", "soon", "nan"):
+        with pytest.raises(SystemExit):
+            main(["reproduce", "-o", str(shared_tmp_path), "--watchdog", minutes])
     plain = shared_tmp_path / "plain.md"
     if MPI.COMM_WORLD.rank == 0:
         plain.write_text("no markers\n")

@@ -25,6 +25,7 @@ from hfcdem.io.files import prepare_output_dir, write_json
 from hfcdem.mesh.tagged import MeshingError
 from hfcdem.reproduce.cases import FIDELITIES, Case, Tier, select_cases
 from hfcdem.reproduce.compare import CaseResult, Comparison
+from hfcdem.reproduce.watchdog import Watchdog
 from hfcdem.solvers import SimulationStopped, SolverError
 
 ROOT = Path(__file__).resolve().parents[2]  # the checkout: scene and study files
@@ -77,6 +78,7 @@ def run_reproduction(
     only: Sequence[str] | None = None,
     force: bool = False,
     say: Callable[[str], None] | None = None,
+    watchdog_s: float = 0.0,
 ) -> list[CaseRecord]:
     """Run the cases of ``tier`` (or those named in ``only``) into ``output``; return them.
 
@@ -84,9 +86,31 @@ def run_reproduction(
     (``solver.fidelity`` of every injection scene) or ``seepage`` (the joints
     fill in time: ``injection.wall_joints``).  ``resolution``: a named mesh
     resolution for every case instead of the tier's.  ``force``: run again what
-    is done.  Collective.
+    is done.  ``watchdog_s``: end the process when no progress line comes for
+    this long (:class:`~hfcdem.reproduce.watchdog.Watchdog`; 0: never).  Collective.
     """
-    say = say or (lambda msg: None)
+    watchdog = Watchdog(watchdog_s)
+    printer = say or (lambda msg: None)
+
+    def heard(msg: str) -> None:
+        watchdog.beat()
+        printer(msg)
+
+    with watchdog:
+        return _run_all(output, comm, tier, fidelity, resolution, only, force, heard, watchdog)
+
+
+def _run_all(
+    output: str | Path,
+    comm: MPI.Comm,
+    tier: str,
+    fidelity: str,
+    resolution: str | None,
+    only: Sequence[str] | None,
+    force: bool,
+    say: Callable[[str], None],
+    watchdog: Watchdog,
+) -> list[CaseRecord]:
     if fidelity not in FIDELITIES:
         raise ValueError(f"--fidelity: expected one of {', '.join(FIDELITIES)}, got {fidelity!r}")
     cases = select_cases(tier, only)
@@ -98,6 +122,7 @@ def run_reproduction(
     for i, case in enumerate(cases, start=1):
         est = clock.left.pop(0)
         where = out / "cases" / case.name
+        watchdog.beat(f"case {case.name} ({where})")
         say(
             f"[{i}/{len(cases)}] {case.name}: {case.title} (about {_minutes(est)}; "
             f"about {_minutes(clock.remaining() + est)} left in all)"
