@@ -3,6 +3,7 @@ mass balance, rank independence, and stability at the extremes."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from functools import cache
 
@@ -15,6 +16,7 @@ from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStr
 from hfcdem.config.parts import Crack, MeshSizing, Plate, Wellbore
 from hfcdem.config.plates import BoreholeSquare, KGDStrip
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
+from hfcdem.flow.balance import GroupBalance
 from hfcdem.flow.fluid import CarterLeakOff
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid
@@ -301,6 +303,23 @@ def test_borehole_higher_rate_or_viscosity_does_not_lower_the_peak():
     assert fast.pressure >= base.pressure * (1 - 1e-2)
     assert thick.pressure >= base.pressure * (1 - 1e-2)
     assert base.pressure >= uniform.pressure * (1 - 1e-2)  # uniform: the inviscid limit
+
+
+def test_a_cavity_emptied_by_loose_wall_blocks_stops_the_run(monkeypatch):
+    """Walls moved in past the cavity's volume: stop with the cause, keep the history."""
+    hf = _borehole(12e6)
+    hf.step()
+    kept = list(hf.history)
+    real = GroupBalance.advance
+
+    def blocks_in_the_cavity(self, *args, **kwargs):
+        after = real(self, *args, **kwargs)
+        return dataclasses.replace(after, cavity_content=-1e-6)
+
+    monkeypatch.setattr(GroupBalance, "advance", blocks_in_the_cavity)
+    with pytest.raises(SimulationStopped, match=r"cavity walls moved inward.*history up to t ="):
+        hf.step()
+    assert hf.history == kept and hf.t == kept[-1].time
 
 
 def test_pressure_schedule_follows_the_pump_and_balances():
