@@ -27,7 +27,9 @@ shortened to the crossing (the loads interpolated linearly within it).
 
 The breakdown is the peak cavity pressure, counted only when the pressure
 falls below it by :data:`BREAKDOWN_DROP` before the run ends (a peak cut off
-by the end of the run is flagged, not published).  The first break is
+by the end of the run is flagged, not published) and when it rose above the
+starting pressure first (a pressure that only falls, the joints taking more
+than the pump delivers, has no breakdown).  The first break is
 reported separately: in 3D it is often a shear breakout at the tunnel wall
 that takes no fluid and leaves the pressure rising.
 """
@@ -448,7 +450,8 @@ class _PumpedCavity:
             )
             if top > peak:
                 peak, peak_time = top, t
-            elif breakdown is None and self.p < peak * (1.0 - BREAKDOWN_DROP):
+            elif breakdown is None and peak_time > 0.0 and self.p < peak * (1.0 - BREAKDOWN_DROP):
+                # (a fall from the starting pressure is the joints' intake, not a breakdown)
                 breakdown = (peak, peak_time)
             if progress is not None and (n % every == 0 or broken):
                 progress(
@@ -470,7 +473,7 @@ class _PumpedCavity:
             breakdown_time=None if breakdown is None else breakdown[1],
             peak_pressure=peak,
             peak_time=peak_time,
-            peak_cut_off=breakdown is None,
+            peak_cut_off=breakdown is None and peak_time > 0.0,
             initial_failures=initial_failures,
             steps=n,
             history=history,

@@ -35,7 +35,7 @@ from mpi4py import MPI
 from hfcdem.config.scene import Scene
 from hfcdem.config.tables import SceneError
 from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakdown
-from hfcdem.coupling.pumping import BREAKDOWN_DROP, pump_with_seepage
+from hfcdem.coupling.pumping import BREAKDOWN_DROP, PumpingResult, pump_with_seepage
 from hfcdem.io.files import write_csv, write_interfaces, write_json
 from hfcdem.io.plots import plot_lines
 from hfcdem.solid.cdem import CDEMSolid
@@ -238,6 +238,7 @@ def _run_pumped(
         "peak_pressure_MPa": result.peak_pressure / 1e6,
         "peak_time_s": result.peak_time,
         "peak_cut_off": result.peak_cut_off,
+        "breakdown_note": _pumping_note(result),
         "first_crack_pressure_MPa": first / 1e6 if first is not None else None,
         "first_crack_time_s": result.first_time,
         "first_crack": _first_crack(location, result.first_mode),
@@ -276,11 +277,23 @@ def _run_pumped(
     if pb is not None:
         say(f"breakdown {pb / 1e6:.4g} MPa at {result.breakdown_time:.4g} s")
     else:
-        say(
-            f"no breakdown: the pressure did not fall {BREAKDOWN_DROP:.0%} below its peak "
-            f"{result.peak_pressure / 1e6:.4g} MPa (at {result.peak_time:.4g} s) before the end"
-        )
+        say(f"no breakdown: {summary['breakdown_note']}")
     return summary
+
+
+def _pumping_note(result: PumpingResult) -> str | None:
+    """Say why a pumped run has no breakdown (None when it has one)."""
+    if result.breakdown is not None:
+        return None
+    if result.peak_time <= 0.0:
+        return (
+            "the pressure never rose above its starting value: the joints took more "
+            "than the pump delivered"
+        )
+    return (
+        f"the pressure did not fall {BREAKDOWN_DROP:.0%} below its peak "
+        f"{result.peak_pressure / 1e6:.4g} MPa (at {result.peak_time:.4g} s) before the end"
+    )
 
 
 __all__ = ["run_seepage_ramp", "seepage_loading"]
