@@ -1,0 +1,101 @@
+"""Where the time of a 3D pumped run with seepage goes: Perforation No. 2, one rank.
+
+No. 2's scene with the joints seeping (``wall_joints = "seepage"``), no wall
+film, water's stiffness (the seepage model's cavity is the mesh's), pumped
+for a few seconds under cProfile, with a time limit.  Prints the steps done
+and the share of the wall time in the seepage network's linear solves, the
+trial seepage steps of the cavity balance, the solid's solves and the form
+compilation (issue 14: "3D pumped seepage cost", profile first).
+
+    make run CMD="python3 benchmarks/seepage_profile.py --seconds 600"
+"""
+
+from __future__ import annotations
+
+import argparse
+import cProfile
+import pstats
+import re
+import signal
+import tempfile
+import time
+from pathlib import Path
+
+from mpi4py import MPI
+
+from hfcdem.config.scene import load_scene
+from hfcdem.workflows.run import run_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+class _TimeUp(Exception):
+    pass
+
+
+def _time_up(*_: object) -> None:
+    raise _TimeUp
+
+
+def _scene_text(duration: float, bulk_modulus: str) -> str:
+    text = (ROOT / "meshes/scenes/perforation_no2.toml").read_text()
+    text = re.sub(r"(?m)^wall_film = .*\n", "", text)
+    text = re.sub(r'(?m)^wall_joints = "[a-z]+"', 'wall_joints = "seepage"', text)
+    text = re.sub(r'(?m)^duration = "[^"]*"', f'duration = "{duration:g} s"', text)
+    text = re.sub(r'(?m)^bulk_modulus = "[^"]*"', f'bulk_modulus = "{bulk_modulus}"', text)
+    return text.replace('name = "perforation_no2"', 'name = "no2_seepage_profile"')
+
+
+def _cumulative(stats: pstats.Stats, pattern: str) -> tuple[float, int]:
+    """Cumulative time and calls of the functions whose ``file:line(name)`` matches."""
+    total, calls = 0.0, 0
+    for (file, line, name), (_, ncalls, _, cum, _) in stats.stats.items():  # type: ignore[attr-defined]
+        if re.search(pattern, f"{file}:{line}({name})"):
+            total += cum
+            calls += ncalls
+    return total, calls
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--seconds", type=int, default=600, help="time limit of the run (s)")
+    ap.add_argument("--resolution", default="coarse")
+    ap.add_argument("--duration", type=float, default=4.0, help="pumping time (s)")
+    ap.add_argument("--bulk-modulus", default="2.2 GPa")
+    args = ap.parse_args()
+    if MPI.COMM_WORLD.size != 1:
+        raise SystemExit("one rank: the profile is of one process")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "no2_seepage.toml"
+        path.write_text(_scene_text(args.duration, args.bulk_modulus))
+        scene = load_scene(path, args.resolution)
+        signal.signal(signal.SIGALRM, _time_up)
+        signal.alarm(args.seconds)
+        prof = cProfile.Profile()
+        t0 = time.perf_counter()
+        prof.enable()
+        try:
+            summary = run_scene(scene, Path(tmp) / "out", force=True, say=print)
+            ended = f"finished: {summary.get('stopped') or 'the whole duration'}"
+        except _TimeUp:
+            ended = f"stopped by the {args.seconds} s limit"
+        prof.disable()
+        signal.alarm(0)
+        wall = time.perf_counter() - t0
+    stats = pstats.Stats(prof)
+    print(f"\n{ended}; {wall:.1f} s of wall time")
+    parts = [
+        ("pumped steps", r"pumping\.py:\d+\(step\)"),
+        ("trial seepage steps (cavity balance)", r"seepage\.py:\d+\(step\)"),
+        ("seepage network linear solves", r"seepage\.py:\d+\(_linear_solve\)"),
+        ("solid solves", r"cdem\.py:\d+\(solve\)"),
+        ("form compilation (ffcx)", r"jit\.py:\d+\(ffcx_jit\)"),
+    ]
+    for label, pattern in parts:
+        cum, calls = _cumulative(stats, pattern)
+        print(f"{label:40s} {calls:6d} calls {cum:8.1f} s {cum / wall:6.1%}")
+    stats.sort_stats("tottime").print_stats(12)
+
+
+if __name__ == "__main__":
+    main()
