@@ -57,12 +57,7 @@ from hfcdem.coupling.groups import (
 from hfcdem.coupling.records import SimulationStopped, StepRecord
 from hfcdem.coupling.settings import FlowSettings
 from hfcdem.coupling.stepping import StepController
-from hfcdem.flow.balance import (
-    GroupBalance,
-    VoidVolumes,
-    gravity_drive,
-    relative_permeability,
-)
+from hfcdem.flow.balance import GroupBalance, VoidVolumes, gravity_drive, relative_permeability
 from hfcdem.flow.newton import solve_groups
 from hfcdem.io.files import write_csv
 from hfcdem.solid.cdem import CDEMSolid

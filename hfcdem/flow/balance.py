@@ -13,9 +13,9 @@ pressure with saturation ``S = M / V``; its neighbours feed it through the
 relative permeability ``S^2 (3 - 2S)``.  Pressures may be ``(m,)`` or a batch
 ``(m, k)`` (columns of a finite-difference Jacobian).
 
-With ``lag`` (uniform rung, saturation filling), water carries no tension: a group's unknown
-``q`` below zero is a group whose void has grown past its fluid (fluid lag, as
-cracks that open faster than the pump fills them).  It then holds
+With ``lag`` (uniform rung, saturation filling), water carries no tension: a
+group's unknown ``q`` below zero is a group whose void has grown past its fluid
+(fluid lag, as cracks that open faster than the pump fills them).  It then holds
 ``V (1 + q / Kw)`` at zero pressure, saturation ``1 + q / Kw``, and the faces
 and fluxes see ``max(q, 0)`` (seed eqs. (18)-(19), the joints' saturation
 filling, applied to the groups).  Without it a group may hold suction: the
