@@ -5,7 +5,10 @@ film, water's stiffness (the seepage model's cavity is the mesh's), pumped
 for a few seconds under cProfile, with a time limit.  Prints the steps done
 and the share of the wall time in the seepage network's linear solves, the
 trial seepage steps of the cavity balance, the solid's solves and the form
-compilation (issue 14: "3D pumped seepage cost", profile first).
+compilation (issue 14: "3D pumped seepage cost", profile first).  Each
+cavity balance is one Newton on the joints and the cavity pressure together;
+trial seepage steps appear only where that Newton failed and the secant
+took over.
 
     make run CMD="python3 benchmarks/seepage_profile.py --seconds 600"
 """
@@ -86,8 +89,10 @@ def main() -> None:
     print(f"\n{ended}; {wall:.1f} s of wall time")
     parts = [
         ("pumped steps", r"pumping\.py:\d+\(step\)"),
-        ("trial seepage steps (cavity balance)", r"seepage\.py:\d+\(step\)"),
-        ("seepage network linear solves", r"seepage\.py:\d+\(_linear_solve\)"),
+        ("cavity balances (joints + cavity Newton)", r"seepage\.py:\d+\(step_pumped\)"),
+        ("trial seepage steps (secant fallback)", r"seepage\.py:\d+\(step\)"),
+        ("seepage Newton matrices set", r"seepage\.py:\d+\(_factorise\)"),
+        ("seepage network solves (LU inside)", r"seepage\.py:\d+\(_solve\)"),
         ("solid solves", r"cdem\.py:\d+\(solve\)"),
         ("form compilation (ffcx)", r"jit\.py:\d+\(ffcx_jit\)"),
     ]

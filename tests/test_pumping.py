@@ -59,6 +59,7 @@ def test_sealed_cavity_breaks_down_at_the_dry_first_break(plate):
     assert crack[~after].max() < 1e-12 < crack[after].min()
     assert tensile[-1] >= 10 and run.shear == 0
     assert run.max_mass_error < 1e-9
+    assert run.secant_balances == 0  # every balance one Newton with the joints
 
 
 def test_faster_pumping_breaks_down_higher(plate):
@@ -70,6 +71,8 @@ def test_faster_pumping_breaks_down_higher(plate):
     assert slow.first_pressure < 0.75 * fast.first_pressure
     assert slow.history[-1][6] > fast.history[-1][6]
     assert max(slow.max_mass_error, fast.max_mass_error) < 1e-9
+    print("mass", slow.max_mass_error, fast.max_mass_error, slow.secant_balances, fast.secant_balances)
+    assert slow.secant_balances == fast.secant_balances == 0
 
 
 def test_a_run_that_ends_on_a_rising_pressure_has_no_breakdown(plate):

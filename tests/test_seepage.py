@@ -506,3 +506,71 @@ def test_filling_bad_input_is_refused(monkeypatch):
     monkeypatch.setattr(seepage, "MAX_NEWTON_ITERATIONS", 1)
     with pytest.raises(RuntimeError, match=r"Newton did not converge in 1 iterations"):
         sp.step(1.0, P0)
+
+
+# --- pumped: the cavity pressure an unknown of the same Newton --------------------------
+
+
+def _pumped_reference(sp: JointSeepage, dt: float, cavity, target: float) -> float:
+    """The cavity pressure by root-finding on whole seepage steps (the state is restored)."""
+    from scipy.optimize import brentq
+
+    saved = sp.save()
+
+    def excess(p: float) -> float:
+        sp.restore(saved)
+        sp.step(dt, p)
+        return cavity.held(p) + float(sp.content.sum()) - target
+
+    p = brentq(excess, 0.0, 100.0 * P0, xtol=1e-9, rtol=1e-14)
+    sp.restore(saved)
+    return p
+
+
+def test_pumped_step_solves_the_cavity_balance_with_the_joints():
+    """A cavity pumped at a constant rate into dry joints, one Newton per step.
+
+    Against the cavity pressure found by root-finding on whole seepage steps
+    (brentq): the same pressure (measured to 1.2e-10 relative, the filling
+    tolerance's 2e-3 Pa) and the same joints; cavity + joints hold exactly what
+    was pumped (measured 1.1e-16 of the total), and the Newton takes as many
+    linear solves as a step at a given pressure (measured at most 6).
+    """
+    from hfcdem.flow.seepage import CavityDry, CavityStorage
+
+    solid = _plate(16)
+    sp, ref = _dry(solid), _dry(solid)
+    kw = FLUID.bulk_modulus
+    volume, slope, p = 2e-4, 1e-13, 1e6  # m^2 per metre of plate, m^2/Pa, Pa
+    total = volume * (1.0 + p / kw) + float(sp.content.sum())
+    rate, dt = 5e-6, 0.5  # m^2/s
+    gaps, solves, balance, inflow, joints = [], [], 0.0, 0.0, 0.0
+    for _ in range(12):
+        cavity = CavityStorage(volume, slope, p, kw)
+        total += rate * dt
+        expected = _pumped_reference(ref, dt, cavity, total)
+        before = float(sp.content.sum())
+        p_new = sp.step_pumped(dt, cavity, total)
+        ref.step(dt, expected)
+        gaps.append(abs(p_new - expected) / expected)
+        solves.append(sp.newton_iterations - ref.newton_iterations)
+        joints = max(joints, float(np.abs(sp.saturation - ref.saturation).max()))
+        held = cavity.held(p_new) + float(sp.content.sum())
+        balance = max(balance, abs(held - total) / total)
+        gained = float(sp.content.sum()) - before
+        inflow = max(inflow, abs(sp.flux_into_network() - gained) / gained)
+        volume, p = volume + slope * (p_new - p), p_new
+    assert max(gaps) < 1e-9  # measured 2.5e-10
+    assert joints < 1e-9  # saturations, measured 1.5e-10
+    assert balance < 1e-15  # measured 2.4e-16
+    assert inflow < 2e-14  # the joints gained what came in: measured 4.2e-15
+    assert solves == [0] * 12  # as many linear solves as the step at the found pressure (5-6)
+    assert 0.25 < float(sp.saturation.mean()) < 0.35  # part filled: measured 0.30
+    assert 14e6 < p < 15e6  # the pump outpaced the joints: measured 14.77 MPa
+    # a target below what the cavity and joints hold at 0 Pa: the cavity runs dry
+    with pytest.raises(CavityDry, match=r"runs dry"):
+        sp.step_pumped(dt, CavityStorage(volume, slope, p, kw), 0.5 * volume)
+    with pytest.raises(ValueError, match=r"bulk_modulus must be > 0 Pa"):
+        CavityStorage(volume, slope, p, 0.0)
+    with pytest.raises(ValueError, match=r"needs filling='saturation'"):
+        _seepage(solid, ["left"]).step_pumped(dt, CavityStorage(volume, slope, p, kw), total)

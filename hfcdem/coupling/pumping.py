@@ -15,7 +15,9 @@ Each step finds the cavity pressure ``P`` that holds the fluid pumped so far::
 
 ``V`` is the cavity's volume (mesh, wall motion and crack openings), linear
 in ``P`` at fixed interface states (its slope from a unit solve); ``J`` the
-joints' content after a trial seepage step at ``P`` (a bracketed secant).
+joints' content after the seepage step with the cavity at ``P``.  ``P`` and
+the joints are one Newton (:meth:`JointSeepage.step_pumped`); a bracketed
+secant on trial seepage steps is the fallback where that Newton fails.
 The solid is then solved at ``P`` with the joint pressures and ``V``
 measured; the balance is repeated until the measured volume is the balanced
 one, so the fluid is conserved at the solved state (the joint pressures'
@@ -51,7 +53,13 @@ from hfcdem.coupling.events import facets_to_break, switch_contacts
 from hfcdem.coupling.groups import local_network
 from hfcdem.coupling.penetration import CavityPumping, illinois_root, settle_excavation
 from hfcdem.flow.network import Network, gather_rows
-from hfcdem.flow.seepage import JointSeepage, joint_network, network_positions
+from hfcdem.flow.seepage import (
+    CavityDry,
+    CavityStorage,
+    JointSeepage,
+    joint_network,
+    network_positions,
+)
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.equilibrium import critical_factor
 from hfcdem.solid.forms import Loads
@@ -89,7 +97,8 @@ class PumpingResult:
     pressure)``; ``max_mass_error``: the largest ``|pumped - held|`` over the
     pumped volume at a step's solved state; ``joint_pressure`` and
     ``saturation`` per local facet of the solid at the end (the cracks joined
-    to the cavity at its pressure, saturation 1).
+    to the cavity at its pressure, saturation 1); ``secant_balances``: cavity
+    balances the joint Newton failed and the secant did.
     """
 
     first_pressure: float | None
@@ -110,6 +119,7 @@ class PumpingResult:
     tensile: int = 0
     shear: int = 0
     stopped: str | None = None
+    secant_balances: int = 0
 
 
 def pump_with_seepage(
@@ -181,6 +191,9 @@ class _PumpedCavity:
         self.volume = self._volume(loads)  # at self.p
         self.m0 = self.volume * (1.0 + self.p / self.kw) + self.joint_content()
         self.worst = 0.0
+        self.secant_balances = 0  # balances the joint Newton could not do
+        # the step's start state and the joints after its last balance: the next one's guess
+        self._last_balance: tuple[np.ndarray, np.ndarray] | None = None
 
     # ------------------------------------------------------------- network
 
@@ -293,7 +306,29 @@ class _PumpedCavity:
     # ------------------------------------------------------------- balance
 
     def balance(self, dt: float, target: float, saved: np.ndarray) -> float:
-        """Cavity pressure that holds ``target`` fluid; steps the seepage there."""
+        """Cavity pressure that holds ``target`` fluid; steps the seepage there.
+
+        One Newton on the joints and the cavity pressure together
+        (:meth:`JointSeepage.step_pumped`), from the joints of the last balance
+        from the same start; should it fail, the bracketed secant on trial
+        seepage steps (:meth:`balance_by_secant`).
+        """
+        last = self._last_balance
+        guess = last[1] if last is not None and last[0] is saved else None
+        self.seep.restore(saved)
+        storage = CavityStorage(self.volume, self.slope, self.p, self.kw)
+        try:
+            p = self.seep.step_pumped(dt, storage, target, guess)
+            self._last_balance = (saved, self.seep.save())
+            return p
+        except CavityDry as dry:
+            raise _Dry(str(dry)) from None
+        except RuntimeError:
+            self.secant_balances += 1
+            return self.balance_by_secant(dt, target, saved)
+
+    def balance_by_secant(self, dt: float, target: float, saved: np.ndarray) -> float:
+        """Do :meth:`balance` by a secant on the cavity pressure, a seepage step per trial."""
         v0, p0, slope, kw, seep = self.volume, self.p, self.slope, self.kw, self.seep
 
         def residual(p: float) -> float:
@@ -483,6 +518,7 @@ class _PumpedCavity:
             tensile=counts["tensile"],
             shear=counts["shear"],
             stopped=stopped,
+            secant_balances=self.secant_balances,
         )
 
 

@@ -20,12 +20,19 @@ The solid does not enter yet: apertures are given, not computed.
 ``V (1 + q / Kw)``, pressure ``max(q, 0)`` and saturation ``min(1, 1 + q / Kw)``,
 fluxes scaled by ``ks = S^2 (3 - 2S)``; each step is a semismooth Newton solve
 (:mod:`hfcdem.flow.filling`).  With every joint full it is the compressible model.
+
+:meth:`JointSeepage.step_pumped` makes the cavity pressure an unknown too: the
+cavity (a :class:`CavityStorage`) and the joints together must hold a given
+volume at the end of the step.  Each Newton iterate is the joints' system
+bordered by that one balance, solved by two back-substitutions with the same
+factorisation, so a pumped step costs one Newton, not one per trial pressure.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from petsc4py import PETSc
@@ -99,6 +106,41 @@ def _finite(name: str, value: float, unit: str) -> float:
     if not math.isfinite(v):
         raise ValueError(f"{name} must be finite ({unit}), got {value!r}")
     return v
+
+
+@dataclass(frozen=True)
+class CavityStorage:
+    """Fluid a cavity holds at pressure ``P``: ``(volume + slope (P - pressure)) (1 + P / Kw)``.
+
+    ``volume`` (m^3; per metre in 2D) at ``pressure`` (Pa), its walls'
+    ``slope`` dV/dP (m^3/Pa) at fixed interface states, the fluid's
+    ``bulk_modulus`` Kw (Pa).
+    """
+
+    volume: float
+    slope: float
+    pressure: float
+    bulk_modulus: float
+
+    def __post_init__(self) -> None:
+        for name, unit in (("volume", "m^3"), ("slope", "m^3/Pa"), ("pressure", "Pa")):
+            _finite(name, getattr(self, name), unit)
+        if not (math.isfinite(self.bulk_modulus) and self.bulk_modulus > 0.0):
+            raise ValueError(f"bulk_modulus must be > 0 Pa, got {self.bulk_modulus!r}")
+
+    def held(self, p: float) -> float:
+        """Fluid held at ``p`` (m^3 at zero pressure)."""
+        return (self.volume + self.slope * (p - self.pressure)) * (1.0 + p / self.bulk_modulus)
+
+    def coefficients(self) -> tuple[float, float, float]:
+        """``(a2, a1, a0)`` with ``held(P) = a2 P^2 + a1 P + a0``."""
+        base = self.volume - self.slope * self.pressure
+        kw = self.bulk_modulus
+        return self.slope / kw, self.slope + base / kw, base
+
+
+class CavityDry(RuntimeError):
+    """The cavity holds more than the target even at zero pressure: it runs dry."""
 
 
 class JointSeepage:
@@ -310,7 +352,93 @@ class JointSeepage:
             f"(dt = {dt!r} s; residual {worst:.3g} of the void or flux round-off); try a smaller dt"
         )
 
+    def step_pumped(
+        self, dt: float, cavity: CavityStorage, target: float, guess: np.ndarray | None = None
+    ) -> float:
+        """Advance by ``dt`` (s) with the cavity pressure unknown; return it (Pa).
+
+        At the end of the step the cavity (``cavity.held``) and the joints
+        (:attr:`content`) hold ``target`` (m^3) together.  Saturation filling
+        only.  A semismooth Newton on the joints and the cavity pressure
+        together: each iterate solves the joints' system linearised as in
+        :meth:`step` for the load and for a unit cavity pressure (one
+        factorisation, two back-substitutions), so the joints respond linearly
+        to the cavity pressure, and the balance, quadratic in it, is solved in
+        closed form.  The accepted iterate conserves mass exactly, as a step's.
+        ``guess``: the joints' state to start Newton from (e.g. the last
+        balance of the same step; default the state before the step).
+        Raises :class:`CavityDry` when the joints and the cavity hold more than
+        ``target`` at zero pressure, RuntimeError when Newton does not converge.
+        """
+        dt = _finite("dt", dt, "s")
+        if dt <= 0.0:
+            raise ValueError(f"dt must be > 0 s, got {dt!r}")
+        target = _finite("target", target, "m^3")
+        if self.filling != "saturation":
+            raise ValueError("step_pumped needs filling='saturation'")
+        old = self._q
+        kw = self.fluid.bulk_modulus
+        void = self.aperture * self.net.area
+        a2, a1, a0 = cavity.coefficients()
+        base = float(void.sum()) - target
+        if self.net.size == 0:
+            p = _balance_root(a2, a1, a0 + base)
+            if p < 0.0:
+                excess = a0 + base
+                raise CavityDry(f"the cavity runs dry (holds {excess:.3g} m^3 more at 0 Pa)")
+            self._injected, self._iterations = 0.0, 0
+            return p
+        rate = self.storage / dt
+        reach, low = self._reach, np.minimum(old, 0.0)
+        count = len(self._cavity)
+        q, p, newton, worst = old, max(cavity.pressure, 0.0), False, math.inf
+        if guess is not None:
+            q = np.asarray(guess, dtype=float)
+            if q.shape != old.shape:
+                raise ValueError(f"guess must hold {old.shape[0]} values, got {q.shape}")
+            q = np.clip(q, low, max(float(old.max()), p))
+        for solves in range(1, MAX_NEWTON_ITERATIONS + 1):
+            lin = linearise(self._pairs, q, kw, np.full(count, p), newton)
+            ksp = self._factorise(lin, rate)
+            x0 = _solve(ksp, rate * old + lin.load)
+            unit = np.zeros(self.net.size)
+            np.add.at(unit, lin.cavity_facets, lin.cavity_tk)
+            x1 = _solve(ksp, unit)  # d q / d P at this linearisation
+            # the joints hold void + S (x0 + (P' - p) x1): the balance's terms in P'
+            c1 = float(self.storage @ x1)
+            c0 = base + float(self.storage @ x0) - p * c1
+            p_new = _balance_root(a2, a1 + c1, a0 + c0)
+            dry = p_new < 0.0
+            p_new = max(p_new, 0.0)
+            new = x0 + (p_new - p) * x1
+            pc = np.full(count, p_new)
+            pmax = max(float(np.abs(old).max()), p_new)
+            scale = dt / np.maximum(void, _ROUNDOFF * dt * reach * pmax / FILLING_TOLERANCE)
+            res = float(np.abs(residual(self._pairs, new, old, rate, kw, pc) * scale).max())
+            if res <= FILLING_TOLERANCE:
+                if dry:
+                    excess = cavity.held(0.0) + float(void @ (1.0 + new / kw)) - target
+                    msg = f"the cavity runs dry (holds {excess:.3g} m^3 more than pumped at 0 Pa)"
+                    raise CavityDry(msg)
+                outflow = float(lin.cavity_outflow(new).sum()) - (p_new - p) * float(
+                    lin.cavity_tk.sum()
+                )
+                self._q, self._injected, self._iterations = new, -dt * outflow, solves
+                return p_new
+            same = np.array_equal(new > 0.0, q > 0.0)
+            newton = same and res < NEWTON_SWITCH and res < worst
+            high = max(float(old.max()), p_new)
+            q, p, worst = np.clip(new, low, high), p_new, res
+        raise RuntimeError(
+            f"pumped seepage: Newton did not converge in {MAX_NEWTON_ITERATIONS} iterations "
+            f"(dt = {dt!r} s; residual {worst:.3g} of the void or flux round-off); try a smaller dt"
+        )
+
     def _linear_solve(self, lin: Linearisation, shift: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        return _solve(self._factorise(lin, shift), rhs)
+
+    def _factorise(self, lin: Linearisation, shift: np.ndarray) -> PETSc.KSP:
+        """Set up the Newton matrix of ``lin`` plus ``diag(shift)`` for solves."""
         indptr, indices, inverse, count = self._pattern
         data = np.bincount(inverse, weights=lin.values, minlength=count)
         if self._fill_solver is None:  # one matrix and KSP for every Newton solve
@@ -323,7 +451,7 @@ class JointSeepage:
             mat.setValuesCSR(indptr.astype(itype), indices.astype(itype), values)
             mat.assemble()
             self._fill_solver.setOperators(mat)
-        return _solve(self._fill_solver, rhs)
+        return self._fill_solver
 
     def steady(self, cavity_pressure: float | np.ndarray) -> np.ndarray:
         """Steady facet pressures for ``cavity_pressure`` (the state is not changed).
@@ -376,6 +504,20 @@ class JointSeepage:
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"{name} must be finite (Pa)")
         return np.broadcast_to(arr, (n,)).copy()
+
+
+def _balance_root(a2: float, a1: float, a0: float) -> float:
+    """Return the root of ``a2 P^2 + a1 P + a0`` on its rising branch (``a1 > 0``, ``a2 >= 0``).
+
+    Negative when the cavity holds too much at 0 Pa (``a0 > 0``); -inf when no
+    real root exists there (so also dry).
+    """
+    if not a1 > 0.0:
+        raise RuntimeError(f"the cavity and joints hold less as the pressure rises ({a1!r} m^3/Pa)")
+    disc = a1 * a1 - 4.0 * a2 * a0
+    if disc < 0.0:
+        return -math.inf
+    return -2.0 * a0 / (a1 + math.sqrt(disc))  # no cancellation whatever the sign of a0
 
 
 def _initial_state(
@@ -481,6 +623,8 @@ __all__ = [
     "NEWTON_SWITCH",
     "PERMEABILITY_COEFFICIENT",
     "PREFIX",
+    "CavityDry",
+    "CavityStorage",
     "JointSeepage",
     "joint_network",
     "network_positions",

@@ -250,6 +250,7 @@ def _run_pumped(
         "joint_aperture_m": phys.joint_aperture,
         "pumping_rate_m3_per_s": pumping.rate,
         "max_mass_error": result.max_mass_error,
+        "secant_balances": result.secant_balances,
         "steps": result.steps,
         "stopped": result.stopped,
     } | record()
