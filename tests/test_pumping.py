@@ -71,7 +71,6 @@ def test_faster_pumping_breaks_down_higher(plate):
     assert slow.first_pressure < 0.75 * fast.first_pressure
     assert slow.history[-1][6] > fast.history[-1][6]
     assert max(slow.max_mass_error, fast.max_mass_error) < 1e-9
-    print("mass", slow.max_mass_error, fast.max_mass_error, slow.secant_balances, fast.secant_balances)
     assert slow.secant_balances == fast.secant_balances == 0
 
 
