@@ -51,6 +51,7 @@ _API = {
     "FlowSettings": "hfcdem.coupling.hydrofrac",
     "StepRecord": "hfcdem.coupling.hydrofrac",
     "SimulationStopped": "hfcdem.solvers",
+    "ValidityLimit": "hfcdem.solvers",
     # workflows and results
     "build_solid": "hfcdem.workflows.run",
     "build_fracture": "hfcdem.workflows.run",

@@ -148,7 +148,7 @@ def _run(args: argparse.Namespace) -> int:
             + f", {summary['joints_holding_pressure']:.1%} of the joints holding pressure, "
             f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
         )
-        return 0 if summary["stopped"] is None else 4
+        return _exit_code(summary)
     if summary.get("kind") == "seepage_pumping":
         fc = summary["first_crack_pressure_MPa"]
         peak = summary["peak_pressure_MPa"]
@@ -163,7 +163,7 @@ def _run(args: argparse.Namespace) -> int:
             + f", {summary['tensile_failures']} tensile / {summary['shear_failures']} shear, "
             f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
         )
-        return 0 if summary["stopped"] is None else 4
+        return _exit_code(summary)
     none = f"none ({summary['breakdown_note']})" if summary.get("breakdown_note") else "none"
     front = summary.get("fluid_front_m")
     say(
@@ -174,7 +174,12 @@ def _run(args: argparse.Namespace) -> int:
         f"{summary['tensile_failures']} tensile / {summary['shear_failures']} shear failures, "
         f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
     )
-    return 0 if summary["stopped"] is None else 4
+    return _exit_code(summary)
+
+
+def _exit_code(summary: dict[str, Any]) -> int:
+    """0 for a run that reached its end or the model's validity limit, 4 for a stopped one."""
+    return 0 if summary["stopped"] is None or summary.get("validity_limit") else 4
 
 
 def _study(args: argparse.Namespace) -> int:
@@ -397,6 +402,9 @@ def _reproduce(args: argparse.Namespace) -> int:
             say(f"error: {error}", err=True)
             return 2
         say(f"{args.readme}: its results table is now this report's")
+    limits = [r.name for r in records if r.status == "limit"]
+    if limits:
+        say(f"cases that ended at the model's validity limit: {', '.join(limits)} (see the report)")
     failed = [r.name for r in records if r.status in ("failed", "stopped")]
     if failed:
         say(f"cases that failed or stopped: {', '.join(failed)} (see the report)", err=True)

@@ -58,6 +58,16 @@ class SimulationStopped(RuntimeError):
     """
 
 
+class ValidityLimit(SimulationStopped):
+    """The run reached a state the model does not represent; its history up to there stands.
+
+    Not a solver failure: e.g. blocks come loose from a cavity wall and move
+    into the cavity, past what the small-displacement solid follows.  Runs and
+    reports mark such a stop as the model's validity limit (``summary.json``:
+    ``validity_limit``), not as a failure.
+    """
+
+
 class SolverError(RuntimeError):
     """A linear or nonlinear solve that did not converge (raised on every rank).
 
@@ -216,6 +226,7 @@ __all__ = [
     "WORKSPACE_ERRORS",
     "SimulationStopped",
     "SolverError",
+    "ValidityLimit",
     "check_ksp",
     "create_ksp",
     "mumps_info",

@@ -20,6 +20,7 @@ from hfcdem.flow.balance import GroupBalance
 from hfcdem.flow.fluid import CarterLeakOff
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solvers import ValidityLimit
 from hfcdem.workflows.breakdown import detect_breakdown
 
 # seed 000 section 4.2: E 25 GPa, nu 0.25, water, Q0 = 4 kg/s per metre (half model: 2)
@@ -317,7 +318,8 @@ def test_a_cavity_emptied_by_loose_wall_blocks_stops_the_run(monkeypatch):
         return dataclasses.replace(after, cavity_content=-1e-6)
 
     monkeypatch.setattr(GroupBalance, "advance", blocks_in_the_cavity)
-    with pytest.raises(SimulationStopped, match=r"cavity walls moved inward.*history up to t ="):
+    # the model's validity limit, not a solver failure (reports say so, runs exit 0)
+    with pytest.raises(ValidityLimit, match=r"cavity walls moved inward.*history up to t ="):
         hf.step()
     assert hf.history == kept and hf.t == kept[-1].time
 

@@ -11,7 +11,7 @@ from hfcdem.cli import main
 from hfcdem.reproduce.cases import CASES, select_cases
 from hfcdem.reproduce.compare import CaseResult, Comparison, trend
 from hfcdem.reproduce.report import BEGIN, END, update_readme
-from hfcdem.reproduce.runner import run_reproduction
+from hfcdem.reproduce.runner import case_status, run_reproduction
 
 
 def _rows(path):
@@ -101,6 +101,21 @@ def test_every_case_is_well_formed():
         if case.kind != "missing":
             assert (root / case.source).exists(), case.source
             assert case.compare is not None
+
+
+@pytest.mark.serial
+def test_a_case_at_the_models_validity_limit_is_not_a_failure(tmp_path):
+    limit = {"stopped": "blocks came loose", "validity_limit": True}
+    solver = {"stopped": "SNES diverged", "validity_limit": False}
+    assert case_status(CaseResult(tmp_path, (), summary=limit)) == ("limit", "blocks came loose")
+    assert case_status(CaseResult(tmp_path, (), summary={"stopped": None})) == ("ok", "")
+    rows = ({"value": 30, **limit}, {"value": 45, "stopped": None}, {"value": 60, **limit})
+    status, message = case_status(CaseResult(tmp_path, (), rows=rows))
+    assert status == "limit" and message == "30: blocks came loose; 60: blocks came loose"
+    mixed = ({"value": 30, **limit}, {"value": 45, **solver})
+    assert case_status(CaseResult(tmp_path, (), rows=mixed))[0] == "stopped"
+    # a summary written before the flag existed: a stop is a stop
+    assert case_status(CaseResult(tmp_path, (), summary={"stopped": "x"}))[0] == "stopped"
 
 
 @pytest.mark.serial

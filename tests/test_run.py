@@ -137,6 +137,33 @@ def test_a_forced_run_that_stops_leaves_no_other_runs_summary(shared_tmp_path):
     assert not case_done(out, scene_fingerprint(coarse))
 
 
+def test_blocks_loose_in_the_cavity_end_the_run_at_its_validity_limit(
+    shared_tmp_path, monkeypatch, capsys
+):
+    """The loose-block stop is the model's validity limit: said so, exit 0, history kept."""
+    import dataclasses
+
+    from hfcdem.flow.balance import GroupBalance
+
+    real, steps = GroupBalance.advance, []
+
+    def blocks_in_the_cavity_at_the_third_balance(self, *args, **kwargs):
+        after = real(self, *args, **kwargs)
+        steps.append(after)
+        return dataclasses.replace(after, cavity_content=-1e-6) if len(steps) == 3 else after
+
+    monkeypatch.setattr(GroupBalance, "advance", blocks_in_the_cavity_at_the_third_balance)
+    out = shared_tmp_path / "limit"
+    assert main(["run", BOREHOLE, "-o", str(out), "--resolution", "coarse"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["validity_limit"] is True
+    assert "cavity walls moved inward" in summary["stopped"] and summary["steps"] >= 1
+    with (out / "history.csv").open() as f:
+        assert len(f.readlines()) == 1 + summary["steps"]  # header and the steps before it
+    if MPI.COMM_WORLD.rank == 0:
+        assert "ended at the validity limit of the model" in capsys.readouterr().out
+
+
 def test_a_scene_without_physics_is_refused_before_meshing(shared_tmp_path):
     scene = parse_scene({"geometry": {"catalogue": "crack_plate"}})
     with pytest.raises(SceneError, match=r"\[rock\]"):

@@ -64,6 +64,7 @@ from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import InterfaceStates
+from hfcdem.solvers import ValidityLimit
 
 # rounds of contact switches in one step's state loop that may open faces (see _switch_contacts)
 _CONTACT_ROUNDS = 1
@@ -510,7 +511,7 @@ class HydraulicFracture:
             # the walls moved in by more than the cavity holds: blocks come loose from the
             # wall and travel into the tunnel, where nothing holds them (residual springs
             # only); the small-displacement solid has no answer past this state
-            raise SimulationStopped(
+            raise ValidityLimit(
                 f"at t = {t1:.6g} s the cavity walls moved inward by more than the cavity's "
                 f"volume ({after.cavity_content:.3g} m^3 left): blocks that came loose from "
                 "the wall move into the cavity, beyond what the small-displacement solid "

@@ -42,6 +42,14 @@ COLUMNS = (
 )
 
 
+#: how the summary table marks a case that did not end normally
+STATUS_TEXT = {
+    "failed": "failed",
+    "stopped": "stopped",
+    "limit": "ended at the model's validity limit",
+}
+
+
 def _num(v: float | None, digits: int = 4) -> str:
     if v is None or not math.isfinite(v):
         return ""
@@ -89,6 +97,7 @@ def _counts(records: Sequence[CaseRecord]) -> dict[str, int]:
         "not met": sum(1 for c in every if c.met is False),
         "not judged": sum(1 for c in every if c.met is None),
         "cases failed or stopped": sum(1 for r in records if r.status in ("failed", "stopped")),
+        "cases at the model's validity limit": sum(1 for r in records if r.status == "limit"),
         "cases not modelled": sum(1 for r in records if r.status == "not modelled"),
     }
 
@@ -132,7 +141,7 @@ def summary_table(records: Sequence[CaseRecord], meta: Mapping[str, Any]) -> str
         if row["met"] or row["status"] != "ok":
             cells = [
                 row["case"]
-                + (f" ({row['status']})" if row["status"] in ("failed", "stopped") else ""),
+                + (f" ({STATUS_TEXT[row['status']]})" if row["status"] in STATUS_TEXT else ""),
                 row["quantity"] or row["status"],
                 row["reference"] + (f" {row['unit']}" if row["unit"] and row["reference"] else ""),
                 row["ours"] + (f" {row['unit']}" if row["unit"] and row["ours"] else ""),
@@ -187,7 +196,7 @@ def _markdown(
         lines += [f"## {title}", ""]
         for r in mine:
             lines += [f"### {r.name}: {r.title}", ""]
-            facts = [f"status: {r.status}"]
+            facts = [f"status: {STATUS_TEXT.get(r.status, r.status)}"]
             if r.resolution:
                 facts.append(f"resolution: {r.resolution}")
             if r.wall_time_s:
@@ -237,7 +246,8 @@ def _html(
             continue
         parts.append(f"<h2>{e(title)}</h2>")
         for r in mine:
-            parts.append(f"<h3>{e(r.name)}: {e(r.title)}</h3><p>status: {e(r.status)}")
+            status = STATUS_TEXT.get(r.status, r.status)
+            parts.append(f"<h3>{e(r.name)}: {e(r.title)}</h3><p>status: {e(status)}")
             if r.resolution:
                 parts.append(f"; resolution: {e(r.resolution)}")
             if r.wall_time_s:

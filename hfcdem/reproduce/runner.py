@@ -41,7 +41,7 @@ class CaseRecord:
     name: str
     paper: str
     title: str
-    status: str  # "ok", "failed", "stopped", "not modelled"
+    status: str  # "ok", "failed", "stopped", "limit" (the model's validity limit), "not modelled"
     comparisons: tuple[Comparison, ...] = ()
     message: str = ""
     resolution: str = ""
@@ -130,7 +130,7 @@ def _run_all(
         t0 = time.perf_counter()
         record = _run_case(case, case.tiers[tier], where, comm, fidelity, resolution, force, say)
         spent = time.perf_counter() - t0
-        if record.status == "ok" and not record.skipped:
+        if record.status in ("ok", "limit") and not record.skipped:
             clock.spent += spent
             clock.estimated += est
         record = _finish(record, where, out, spent, comm)
@@ -215,11 +215,11 @@ def _run_case(
     compared = comm.bcast(compared, root=0)
     if isinstance(compared, str):
         return _replace(base, status="failed", message=compared, resolution=text)
-    stopped = [s for s in _stops(result) if s]
+    status, message = case_status(result)
     return _replace(
         base,
-        status="stopped" if stopped else "ok",
-        message="; ".join(stopped),
+        status=status,
+        message=message,
         comparisons=compared,
         resolution=text,
         figures=tuple(str(where / f) for f in case.figures),
@@ -231,11 +231,24 @@ def _replace(record: CaseRecord, **changes: Any) -> CaseRecord:
     return dataclasses.replace(record, **changes)
 
 
-def _stops(result: CaseResult) -> list[str]:
+def case_status(result: CaseResult) -> tuple[str, str]:
+    """Return the status of a case that ran, and why its runs stopped.
+
+    ``"ok"``: no run stopped; ``"limit"``: every stop was the model's validity
+    limit (``summary.json``'s ``validity_limit``: the answers before it stand);
+    ``"stopped"``: a run stopped otherwise (e.g. a solver gave up).
+    """
     if result.summary:
         stopped = result.summary.get("stopped")
-        return [str(stopped)] if stopped else []
-    return [f"{r.get('value')}: {r['stopped']}" for r in result.rows if r.get("stopped")]
+        stops = [(str(stopped), bool(result.summary.get("validity_limit")))] if stopped else []
+    else:
+        stops = [
+            (f"{r.get('value')}: {r['stopped']}", bool(r.get("validity_limit")))
+            for r in result.rows
+            if r.get("stopped")
+        ]
+    status = "ok" if not stops else "limit" if all(limit for _, limit in stops) else "stopped"
+    return status, "; ".join(message for message, _ in stops)
 
 
 def _execute(
@@ -386,4 +399,4 @@ def run_tag(comm: MPI.Comm) -> dict[str, Any]:
     }
 
 
-__all__ = ["CASE_ERRORS", "CaseRecord", "CaseResult", "run_reproduction", "run_tag"]
+__all__ = ["CASE_ERRORS", "CaseRecord", "CaseResult", "case_status", "run_reproduction", "run_tag"]

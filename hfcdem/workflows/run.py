@@ -46,6 +46,7 @@ from hfcdem.io.history import HistoryFile
 from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import FieldSeries
 from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solvers import ValidityLimit
 from hfcdem.workflows.breakdown import breakdown_note, detect_breakdown
 from hfcdem.workflows.observers import (
     CheckpointWriter,
@@ -294,7 +295,7 @@ def _run_coupled(
         ProgressLine(say, t_end),
         *observers,
     ]
-    stopped = _step_until(frac, t_end, watchers, say)
+    stopped, limit = _step_until(frac, t_end, watchers, say)
     # the curve starts from the initial state, so the rise to the peak is measured from it
     times = [0.0] + [r.time for r in frac.history]
     pressures = [phys.initial_pressure] + [r.injection_pressure for r in frac.history]
@@ -302,6 +303,7 @@ def _run_coupled(
     points, data = frac.facet_fields()
     write_interfaces(out / "fracture.vtu", points, data, comm)
     summary = _summarise(scene, frac, found, pressures, first, stopped) | record()
+    summary["validity_limit"] = limit
     summary |= _inlet_answers(scene, frac)
     write_json(out / "summary.json", summary, comm)
     if comm.rank == 0 and pressures:
@@ -402,9 +404,13 @@ def _step_until(
     t_end: float,
     watchers: Sequence[StepObserver],
     say: Callable[[str], None],
-) -> str | None:
-    """Step to ``t_end``, handing each record to the observers; return why it stopped."""
-    stopped = None
+) -> tuple[str | None, bool]:
+    """Step to ``t_end``, handing each record to the observers.
+
+    Returns why it stopped (None: it reached ``t_end``) and whether that was
+    the model's validity limit (:class:`ValidityLimit`) rather than a failure.
+    """
+    stopped, limit = None, False
     for w in watchers:
         w.start(frac)
     try:
@@ -414,12 +420,12 @@ def _step_until(
             for w in watchers:
                 w.step(frac, rec)
     except SimulationStopped as exc:
-        stopped = str(exc)
-        say(f"stopped: {exc}")
+        stopped, limit = str(exc), isinstance(exc, ValidityLimit)
+        say(f"{'ended at the validity limit of the model' if limit else 'stopped'}: {exc}")
     finally:
         for w in watchers:
             w.finish(frac, stopped)
-    return stopped
+    return stopped, limit
 
 
 def _picture_fracture(path: Path, scene: Scene, frac: HydraulicFracture) -> None:
