@@ -60,6 +60,24 @@ def test_sealed_cavity_breaks_down_at_the_dry_first_break(plate):
     assert tensile[-1] >= 10 and run.shear == 0
     assert run.max_mass_error < 1e-9
     assert run.secant_balances == 0  # every balance one Newton with the joints
+    # the crack opens by at most 0.024 of its cells' size (measured): far from LOOSE_JUMP
+    assert run.stopped is None and not run.validity_limit
+
+
+def test_a_block_moving_out_of_the_rock_ends_the_run_at_its_validity_limit(plate, monkeypatch):
+    """A broken face opened past LOOSE_JUMP cell sizes: stop there, named, history kept.
+
+    The sealed cavity's crack opens by up to 0.024 of its cells' size; a limit
+    below that opening makes the first break's step the last one tried.
+    """
+    from hfcdem.coupling import pumping
+
+    monkeypatch.setattr(pumping, "LOOSE_JUMP", 1e-6)
+    run = _pump(plate, 1e-9)
+    assert run.validity_limit and "moved" in run.stopped and "small-displacement" in run.stopped
+    assert run.first_pressure is None and run.breakdown is None  # its step is not kept
+    t = np.array(run.history)[:, 0]
+    assert len(t) >= 10 and run.peak_pressure == pytest.approx(run.history[-1][1])
 
 
 def test_faster_pumping_breaks_down_higher(plate):

@@ -65,6 +65,7 @@ from hfcdem.solid.equilibrium import critical_factor
 from hfcdem.solid.forms import Loads
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import OPEN, CascadeStopped
+from hfcdem.solvers import ValidityLimit
 
 #: a peak counts as the breakdown once the pressure has fallen this fraction below it
 BREAKDOWN_DROP = 0.01
@@ -80,6 +81,10 @@ _PAST = 1e-6
 
 #: shortenings of one step to land on a crossing
 _MAX_LANDINGS = 3
+
+#: a broken interface whose faces moved apart by more than this times its cells' size has
+#: left the small-displacement solid behind (a block sliding or lifting out of the wall)
+LOOSE_JUMP = 1.0
 
 
 @dataclass(frozen=True)
@@ -98,7 +103,9 @@ class PumpingResult:
     pumped volume at a step's solved state; ``joint_pressure`` and
     ``saturation`` per local facet of the solid at the end (the cracks joined
     to the cavity at its pressure, saturation 1); ``secant_balances``: cavity
-    balances the joint Newton failed and the secant did.
+    balances the joint Newton failed and the secant did; ``validity_limit``:
+    the run stopped where the small-displacement solid no longer holds
+    (``stopped`` says where), its history up to there standing.
     """
 
     first_pressure: float | None
@@ -119,6 +126,7 @@ class PumpingResult:
     tensile: int = 0
     shear: int = 0
     stopped: str | None = None
+    validity_limit: bool = False
     secant_balances: int = 0
 
 
@@ -389,6 +397,7 @@ class _PumpedCavity:
             loads = self.loads(p, self.seep.pressure)
             predicted = self.volume + self.slope * (p - self.p)
             solid.solve(loads)
+            _check_small_displacement(solid, t + dt)
             self.volume, self.p = self._volume(loads), p
             if abs(self.volume - predicted) * (1.0 + p / self.kw) > (
                 _VOLUME_TOLERANCE * self.pumping.rate * dt
@@ -460,7 +469,7 @@ class _PumpedCavity:
         t, n = 0.0, 0
         history: list[tuple[float, ...]] = []
         first: tuple[float, float, int, np.ndarray] | None = None
-        peak, peak_time, stopped = self.p, 0.0, None
+        peak, peak_time, stopped, limit = self.p, 0.0, None, False
         breakdown: tuple[float, float] | None = None
         every = max(1, pumping.steps // 10)
         while t < pumping.duration * (1.0 - 1e-12):
@@ -469,6 +478,9 @@ class _PumpedCavity:
                 dt, broken, worst, top = self.step(t, dt, max_iterations)
             except _Dry as stop:
                 stopped = str(stop)
+                break
+            except ValidityLimit as stop:
+                stopped, limit = str(stop), True
                 break
             t, n = t + dt, n + 1
             if worst is not None and first is None:
@@ -518,7 +530,37 @@ class _PumpedCavity:
             tensile=counts["tensile"],
             shear=counts["shear"],
             stopped=stopped,
+            validity_limit=limit,
             secant_balances=self.secant_balances,
+        )
+
+
+def _check_small_displacement(solid: CDEMSolid, t: float) -> None:
+    """Raise :class:`ValidityLimit` where a broken interface opened or slid past its size.
+
+    A block cut out of the wall by broken faces, held by residual springs only,
+    slides or lifts out of it when the loads push it (no static equilibrium):
+    the small-displacement solid then reports metres of motion and cavity
+    volumes far beyond the rock's (collective).
+    """
+    broken = np.flatnonzero((solid.state != FacetState.INTACT) & solid.owned)
+    mine = (0.0, np.zeros(solid.gdim), 0.0)
+    if broken.size:
+        x, cells = solid.midpoints[broken], solid.cells[broken]
+        jump = np.asarray(solid.u.eval(x, cells[:, 0]) - solid.u.eval(x, cells[:, 1]))
+        size = np.linalg.norm(jump.reshape(len(broken), -1), axis=1)
+        k = int(np.argmax(size / solid.h[broken]))
+        f = broken[k]
+        where = solid.midpoints[f, : solid.gdim].copy()
+        mine = (float(size[k] / solid.h[f]), where, float(size[k]))
+    ratio, where, size = max(solid.comm.allgather(mine), key=lambda item: item[0])
+    if ratio > LOOSE_JUMP:
+        at = ", ".join(f"{v:.4g}" for v in where)
+        raise ValidityLimit(
+            f"at t = {t:.6g} s a broken interface at ({at}) m moved {size:.3g} m apart, "
+            f"{ratio:.3g} times its cells' size: a block cut out by broken faces slides or "
+            "lifts out of the rock, beyond what the small-displacement solid represents; "
+            "the history up to the last step stands"
         )
 
 
@@ -540,4 +582,4 @@ def _worst_facet(solid: CDEMSolid, ratio: np.ndarray, mode: np.ndarray) -> tuple
     return best[1], np.asarray(best[2])
 
 
-__all__ = ["BREAKDOWN_DROP", "PumpingResult", "pump_with_seepage"]
+__all__ = ["BREAKDOWN_DROP", "LOOSE_JUMP", "PumpingResult", "pump_with_seepage"]

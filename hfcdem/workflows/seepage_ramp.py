@@ -253,6 +253,7 @@ def _run_pumped(
         "secant_balances": result.secant_balances,
         "steps": result.steps,
         "stopped": result.stopped,
+        "validity_limit": result.validity_limit,
     } | record()
     write_json(out / "summary.json", summary, comm)
     if comm.rank == 0 and result.history:
