@@ -53,3 +53,39 @@ def test_the_cap_picks_the_most_overstressed():
     assert solid.model.break_rule == "most_overstressed"
     rule = facets_to_break(solid, ratio, cap=None)  # the model's rule: the worst alone
     assert solid.comm.allreduce(len(rule), op=MPI.SUM) == 1
+
+
+def _largest_jump_over_size(solid) -> float:
+    crack = crack_facets(solid)
+    crack = crack[solid.state[crack] != 0]
+    if not crack.size:  # this rank holds none of the crack
+        return solid.comm.allreduce(0.0, op=MPI.MAX)
+    x, cells = solid.midpoints[crack], solid.cells[crack]
+    jump = np.asarray(solid.u.eval(x, cells[:, 0]) - solid.u.eval(x, cells[:, 1]))
+    ratio = np.linalg.norm(jump.reshape(len(crack), -1), axis=1) / solid.h[crack]
+    return solid.comm.allreduce(float(ratio.max(initial=0.0)), op=MPI.MAX)
+
+
+def test_a_block_cut_loose_is_the_models_validity_limit():
+    """Half the crack broken: an elastic opening; all of it: the left half is loose."""
+    import pytest
+
+    from hfcdem.coupling import events
+    from hfcdem.solvers import ValidityLimit
+
+    loads = Loads(crack_pressure=5e6)
+    half = tiny_solid()
+    lower = crack_facets(half)
+    lower = lower[half.owned[lower] & (half.midpoints[lower, 1] < 0.5)]
+    half.break_facets(lower, np.ones(len(lower), dtype=np.int8), 0.0)
+    half.solve(loads)
+    held = _largest_jump_over_size(half)
+    assert 0.0 < held < 2e-3 * events.LOOSE_JUMP  # measured 1.01e-3
+    events.check_small_displacement(half, 1.0)  # quiet
+
+    loose = tiny_solid()  # x = 1 broken top to bottom: only residual springs hold x < 1
+    break_crack(loose)
+    loose.solve(loads)
+    assert _largest_jump_over_size(loose) > 1e3 * events.LOOSE_JUMP  # measured 4.0e4
+    with pytest.raises(ValidityLimit, match=r"at t = 2 s a broken interface at .* moved"):
+        events.check_small_displacement(loose, 2.0)

@@ -70,9 +70,9 @@ def test_a_block_moving_out_of_the_rock_ends_the_run_at_its_validity_limit(plate
     The sealed cavity's crack opens by up to 0.024 of its cells' size; a limit
     below that opening makes the first break's step the last one tried.
     """
-    from hfcdem.coupling import pumping
+    from hfcdem.coupling import events
 
-    monkeypatch.setattr(pumping, "LOOSE_JUMP", 1e-6)
+    monkeypatch.setattr(events, "LOOSE_JUMP", 1e-6)
     run = _pump(plate, 1e-9)
     assert run.validity_limit and "moved" in run.stopped and "small-displacement" in run.stopped
     assert run.first_pressure is None and run.breakdown is None  # its step is not kept

@@ -1,8 +1,9 @@
-"""Interface events within a coupled step: contact switches (chatter cut off) and breaks.
+"""Interface events within a coupled step: contact switches, breaks, blocks cut loose.
 
 The coupled problem repeats a step until the interface states settle; these
 functions change the solid's states and say how many changed (global counts),
-and the problem recondenses when any did.
+and the problem recondenses when any did.  A broken face that moved apart by
+more than its cells' size ends a run at the model's validity limit.
 """
 
 from __future__ import annotations
@@ -12,8 +13,13 @@ from mpi4py import MPI
 
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
-from hfcdem.solid.interfaces import select_breaking
+from hfcdem.solid.interfaces import FacetState, select_breaking
 from hfcdem.solid.states import OPEN
+from hfcdem.solvers import ValidityLimit
+
+#: a broken interface whose faces moved apart by more than this times its cells' size has
+#: left the small-displacement solid behind (a block sliding or lifting out of the wall)
+LOOSE_JUMP = 1.0
 
 
 def switch_contacts(solid: CDEMSolid, loads: Loads, only_closing: bool) -> int:
@@ -53,4 +59,33 @@ def facets_to_break(solid: CDEMSolid, ratio: np.ndarray, cap: int | None) -> np.
     return select_breaking(ratio, solid.midpoints, rule, count, solid.comm)
 
 
-__all__ = ["facets_to_break", "switch_contacts"]
+def check_small_displacement(solid: CDEMSolid, t: float) -> None:
+    """Raise :class:`ValidityLimit` where a broken interface opened or slid past its size.
+
+    A block cut out of the wall by broken faces, held by residual springs only,
+    slides or lifts out of it when the loads push it (no static equilibrium):
+    the small-displacement solid then reports metres of motion and cavity
+    volumes far beyond the rock's (collective).
+    """
+    broken = np.flatnonzero((solid.state != FacetState.INTACT) & solid.owned)
+    mine = (0.0, np.zeros(solid.gdim), 0.0)
+    if broken.size:
+        x, cells = solid.midpoints[broken], solid.cells[broken]
+        jump = np.asarray(solid.u.eval(x, cells[:, 0]) - solid.u.eval(x, cells[:, 1]))
+        size = np.linalg.norm(jump.reshape(len(broken), -1), axis=1)
+        k = int(np.argmax(size / solid.h[broken]))
+        f = broken[k]
+        where = solid.midpoints[f, : solid.gdim].copy()
+        mine = (float(size[k] / solid.h[f]), where, float(size[k]))
+    ratio, where, size = max(solid.comm.allgather(mine), key=lambda item: item[0])
+    if ratio > LOOSE_JUMP:
+        at = ", ".join(f"{v:.4g}" for v in where)
+        raise ValidityLimit(
+            f"at t = {t:.6g} s a broken interface at ({at}) m moved {size:.3g} m apart, "
+            f"{ratio:.3g} times its cells' size: a block cut out by broken faces slides or "
+            "lifts out of the rock, beyond what the small-displacement solid represents; "
+            "the history up to the last step stands"
+        )
+
+
+__all__ = ["LOOSE_JUMP", "check_small_displacement", "facets_to_break", "switch_contacts"]

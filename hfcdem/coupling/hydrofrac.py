@@ -43,7 +43,7 @@ from hfcdem.coupling.condense import (
     mean_point,
     mesh_cavity_volume,
 )
-from hfcdem.coupling.events import facets_to_break, switch_contacts
+from hfcdem.coupling.events import check_small_displacement, facets_to_break, switch_contacts
 from hfcdem.coupling.fluidstate import FluidState
 from hfcdem.coupling.groups import (
     condense_network,
@@ -429,6 +429,7 @@ class HydraulicFracture:
                 f"interface states did not settle in {s.max_state_iterations} iterations at "
                 f"t = {t1:.6g} s; use a smaller time step"
             )
+        check_small_displacement(solid, t1)
         return self._accept(p, dt, t1, source, leak, (its_total, last_its), changed_states)
 
     def _report(self, t1: float, iteration: int) -> None:

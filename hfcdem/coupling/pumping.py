@@ -49,7 +49,7 @@ from mpi4py import MPI
 
 from hfcdem.config.materials import Fluid
 from hfcdem.coupling.condense import cavity_vertices, mesh_cavity_volume
-from hfcdem.coupling.events import facets_to_break, switch_contacts
+from hfcdem.coupling.events import check_small_displacement, facets_to_break, switch_contacts
 from hfcdem.coupling.groups import local_network
 from hfcdem.coupling.penetration import CavityPumping, illinois_root, settle_excavation
 from hfcdem.flow.network import Network, gather_rows
@@ -81,10 +81,6 @@ _PAST = 1e-6
 
 #: shortenings of one step to land on a crossing
 _MAX_LANDINGS = 3
-
-#: a broken interface whose faces moved apart by more than this times its cells' size has
-#: left the small-displacement solid behind (a block sliding or lifting out of the wall)
-LOOSE_JUMP = 1.0
 
 
 @dataclass(frozen=True)
@@ -397,7 +393,7 @@ class _PumpedCavity:
             loads = self.loads(p, self.seep.pressure)
             predicted = self.volume + self.slope * (p - self.p)
             solid.solve(loads)
-            _check_small_displacement(solid, t + dt)
+            check_small_displacement(solid, t + dt)
             self.volume, self.p = self._volume(loads), p
             if abs(self.volume - predicted) * (1.0 + p / self.kw) > (
                 _VOLUME_TOLERANCE * self.pumping.rate * dt
@@ -535,35 +531,6 @@ class _PumpedCavity:
         )
 
 
-def _check_small_displacement(solid: CDEMSolid, t: float) -> None:
-    """Raise :class:`ValidityLimit` where a broken interface opened or slid past its size.
-
-    A block cut out of the wall by broken faces, held by residual springs only,
-    slides or lifts out of it when the loads push it (no static equilibrium):
-    the small-displacement solid then reports metres of motion and cavity
-    volumes far beyond the rock's (collective).
-    """
-    broken = np.flatnonzero((solid.state != FacetState.INTACT) & solid.owned)
-    mine = (0.0, np.zeros(solid.gdim), 0.0)
-    if broken.size:
-        x, cells = solid.midpoints[broken], solid.cells[broken]
-        jump = np.asarray(solid.u.eval(x, cells[:, 0]) - solid.u.eval(x, cells[:, 1]))
-        size = np.linalg.norm(jump.reshape(len(broken), -1), axis=1)
-        k = int(np.argmax(size / solid.h[broken]))
-        f = broken[k]
-        where = solid.midpoints[f, : solid.gdim].copy()
-        mine = (float(size[k] / solid.h[f]), where, float(size[k]))
-    ratio, where, size = max(solid.comm.allgather(mine), key=lambda item: item[0])
-    if ratio > LOOSE_JUMP:
-        at = ", ".join(f"{v:.4g}" for v in where)
-        raise ValidityLimit(
-            f"at t = {t:.6g} s a broken interface at ({at}) m moved {size:.3g} m apart, "
-            f"{ratio:.3g} times its cells' size: a block cut out by broken faces slides or "
-            "lifts out of the rock, beyond what the small-displacement solid represents; "
-            "the history up to the last step stands"
-        )
-
-
 class _Dry(RuntimeError):
     """A pumped step that cannot go on (the message says why)."""
 
@@ -582,4 +549,4 @@ def _worst_facet(solid: CDEMSolid, ratio: np.ndarray, mode: np.ndarray) -> tuple
     return best[1], np.asarray(best[2])
 
 
-__all__ = ["BREAKDOWN_DROP", "LOOSE_JUMP", "PumpingResult", "pump_with_seepage"]
+__all__ = ["BREAKDOWN_DROP", "PumpingResult", "pump_with_seepage"]
