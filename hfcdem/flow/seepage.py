@@ -328,12 +328,8 @@ class JointSeepage:
         old = self._q
         kw = self.fluid.bulk_modulus
         rate = self.storage / dt
-        # tolerance: a fraction of the void, or the round-off of the facet's flux sum when
-        # that is larger (a long step on full joints: fluxes far above the void)
-        reach = self._reach
         pmax = max(float(np.abs(old).max()), float(pc.max(initial=0.0)))
-        void = self.aperture * self.net.area
-        scale = dt / np.maximum(void, _ROUNDOFF * dt * reach * pmax / FILLING_TOLERANCE)
+        scale = self._residual_scale(dt, pmax)
         # a joint below full at the end only gained (p = 0: nothing flows out), and no
         # pressure exceeds the largest old or cavity one (a monotone scheme)
         low, high = np.minimum(old, 0.0), max(float(old.max()), float(pc.max(initial=0.0)))
@@ -389,7 +385,7 @@ class JointSeepage:
             self._injected, self._iterations = 0.0, 0
             return p
         rate = self.storage / dt
-        reach, low = self._reach, np.minimum(old, 0.0)
+        low, old_max = np.minimum(old, 0.0), float(np.abs(old).max())
         count = len(self._cavity)
         q, p, newton, worst = old, max(cavity.pressure, 0.0), False, math.inf
         if guess is not None:
@@ -412,8 +408,7 @@ class JointSeepage:
             p_new = max(p_new, 0.0)
             new = x0 + (p_new - p) * x1
             pc = np.full(count, p_new)
-            pmax = max(float(np.abs(old).max()), p_new)
-            scale = dt / np.maximum(void, _ROUNDOFF * dt * reach * pmax / FILLING_TOLERANCE)
+            scale = self._residual_scale(dt, max(old_max, p_new))
             res = float(np.abs(residual(self._pairs, new, old, rate, kw, pc) * scale).max())
             if res <= FILLING_TOLERANCE:
                 if dry:
@@ -433,6 +428,15 @@ class JointSeepage:
             f"pumped seepage: Newton did not converge in {MAX_NEWTON_ITERATIONS} iterations "
             f"(dt = {dt!r} s; residual {worst:.3g} of the void or flux round-off); try a smaller dt"
         )
+
+    def _residual_scale(self, dt: float, pmax: float) -> np.ndarray:
+        """Per facet, ``dt`` over the volume a step's residual is measured against.
+
+        A fraction of the void, or the round-off of the facet's flux sum when that
+        is larger (a long step on full joints: fluxes far above the void).
+        """
+        void = self.aperture * self.net.area
+        return dt / np.maximum(void, _ROUNDOFF * dt * self._reach * pmax / FILLING_TOLERANCE)
 
     def _linear_solve(self, lin: Linearisation, shift: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         return _solve(self._factorise(lin, shift), rhs)

@@ -302,8 +302,7 @@ def _run_coupled(
     found = detect_breakdown(times, pressures)
     points, data = frac.facet_fields()
     write_interfaces(out / "fracture.vtu", points, data, comm)
-    summary = _summarise(scene, frac, found, pressures, first, stopped) | record()
-    summary["validity_limit"] = limit
+    summary = _summarise(scene, frac, found, pressures, first, stopped, limit) | record()
     summary |= _inlet_answers(scene, frac)
     write_json(out / "summary.json", summary, comm)
     if comm.rank == 0 and pressures:
@@ -321,6 +320,7 @@ def _summarise(
     pressures: list[float],
     first: FirstCrack,
     stopped: str | None,
+    limit: bool,
 ) -> dict[str, Any]:
     """Collect the answers of a coupled run for ``summary.json``."""
     solid = frac.solid
@@ -348,6 +348,7 @@ def _summarise(
         "solved_unknowns": solid.num_dofs,  # at the end (reduced: grows with the band)
         "max_mass_error": max((r.mass_error for r in frac.history), default=0.0),
         "stopped": stopped,
+        "validity_limit": limit,
     }
 
 
