@@ -63,6 +63,7 @@ from hfcdem.flow.seepage import (
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.equilibrium import critical_factor
 from hfcdem.solid.forms import Loads
+from hfcdem.solid.fragments import Fragments
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import OPEN, CascadeStopped
 from hfcdem.solvers import ValidityLimit
@@ -101,7 +102,9 @@ class PumpingResult:
     to the cavity at its pressure, saturation 1); ``secant_balances``: cavity
     balances the joint Newton failed and the secant did; ``validity_limit``:
     the run stopped where the small-displacement solid no longer holds
-    (``stopped`` says where), its history up to there standing.
+    (``stopped`` says where), its history up to there standing;
+    ``debris_cells``: cells of the blocks cut loose from the walls, whose faces
+    the fluid took (:mod:`hfcdem.solid.fragments`).
     """
 
     first_pressure: float | None
@@ -124,6 +127,7 @@ class PumpingResult:
     stopped: str | None = None
     validity_limit: bool = False
     secant_balances: int = 0
+    debris_cells: int = 0
 
 
 def pump_with_seepage(
@@ -178,6 +182,10 @@ class _PumpedCavity:
         self.aperture, self.pumping = aperture, pumping
         self.kw = fluid.bulk_modulus
         self.walls = cavity_vertices(solid, cavity, None)
+        self.fragments = Fragments(solid, cavity)
+        self.debris_cells = 0
+        self.debris_news: list[str] = []  # for the progress output
+        self.release_debris(0.0)
         self.v_mesh = mesh_cavity_volume(solid, cavity) + pumping.extra_volume
         n = ufl.FacetNormal(solid.mesh)
         ds = solid.tmesh.ds
@@ -202,11 +210,33 @@ class _PumpedCavity:
     # ------------------------------------------------------------- network
 
     def _joined_cracks(self) -> np.ndarray:
-        """Per local facet: broken and joined to the cavity through broken facets."""
+        """Per local facet: broken and joined to the cavity through broken facets.
+
+        The faces of debris are joined: the cavity's fluid surrounds it.
+        """
         local = local_network(self.solid, self.walls)
         out = np.zeros(self.solid.num_facets, dtype=bool)
         out[local.view.facets] = local.joined[local.view.positions]
-        return out
+        return out | self.solid.released
+
+    def release_debris(self, t: float) -> int:
+        """Hold open the faces of blocks newly cut loose from the walls; their count.
+
+        Such a block has no static equilibrium on its broken faces (a wedge at
+        the wall slides out along them); the cavity's fluid surrounds it instead
+        and its faces, and the rock behind them, take the cavity pressure.
+        """
+        solid = self.solid
+        facets, cells = self.fragments.debris()
+        count = int(solid.comm.allreduce(int(np.count_nonzero(solid.owned[facets])), MPI.SUM))
+        if count:
+            solid.release_facets(facets)
+            self.debris_news.append(
+                f"  t {t:.4g} s: {cells - self.debris_cells} cell(s) cut loose from the wall "
+                f"are debris: {count} broken faces around them take the cavity pressure"
+            )
+            self.debris_cells = cells
+        return count
 
     def _network(
         self, old: Network | None, old_q: np.ndarray | None
@@ -423,6 +453,7 @@ class _PumpedCavity:
                 first = (p, *_worst_facet(solid, ratio, mode))
             solid.break_facets(chosen, mode[chosen], t + dt)
             broken, rounds = broken + count, 0
+            self.release_debris(t + dt)
             cracks = self._joined_cracks()
             if solid.comm.allreduce(not np.array_equal(cracks, self.cracks), op=MPI.LOR):
                 self.cracks = cracks
@@ -496,6 +527,10 @@ class _PumpedCavity:
             elif breakdown is None and peak_time > 0.0 and self.p < peak * (1.0 - BREAKDOWN_DROP):
                 # (a fall from the starting pressure is the joints' intake, not a breakdown)
                 breakdown = (peak, peak_time)
+            if progress is not None:
+                for news in self.debris_news:
+                    progress(news)
+            self.debris_news.clear()
             if progress is not None and (n % every == 0 or broken):
                 progress(
                     f"  t {t:.4g} s, cavity {self.p / 1e6:.4g} MPa, {counts['tensile']} tensile "
@@ -528,6 +563,7 @@ class _PumpedCavity:
             stopped=stopped,
             validity_limit=limit,
             secant_balances=self.secant_balances,
+            debris_cells=self.debris_cells,
         )
 
 

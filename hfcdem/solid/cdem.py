@@ -163,6 +163,7 @@ class CDEMSolid:
             self.strength_points = [vx[:, k] for k in range(vx.shape[1])]
         self.t0, self.c0 = self._strengths()
         self._bcs = dg_boundary_conditions(self.V, tmesh, degree, rollers or {}, fixed)
+        self.fixed_groups = tuple(fixed)  # faces held in every component: blocks there stay
         nitsche = nitsche_penalty if nitsche_penalty is not None else 10.0 * (degree + 1) ** 2
         self.forms = SolidForms(
             tmesh, self.V, material, interfaces, self.sigma0, nitsche, self.facet_functions
@@ -263,6 +264,11 @@ class CDEMSolid:
     def friction_traction(self) -> np.ndarray:
         """(F, gdim) Coulomb traction of sliding interfaces on their + face."""
         return self.states.friction_traction
+
+    @property
+    def released(self) -> np.ndarray:
+        """Per interface: a face of a block cut loose, held open (see ``release_facets``)."""
+        return self.states.released
 
     def _strengths(self) -> tuple[np.ndarray, np.ndarray]:
         """Tensile strength and cohesion per interface (Weibull scatter keyed by vertex ids)."""
@@ -505,7 +511,8 @@ class CDEMSolid:
     def update_contact(self, loads: Loads) -> int:
         """Open/close/slip switches of broken facets; returns the global count of changes."""
         snap = self.snapshot(loads)
-        broken = (self.state != FacetState.INTACT) & ~self.is_crack
+        # pre-existing cracks and the faces of loose blocks stay open
+        broken = (self.state != FacetState.INTACT) & ~self.is_crack & ~self.states.released
         old = self.contact.copy()
         # both directions compare the normal spring traction t0n + kn w with the fluid
         # pressure (faces_overlap)
@@ -577,6 +584,15 @@ class CDEMSolid:
             self.band.include(flags)
         mids = self.midpoints[facets]
         self.events.append(BreakEvent(load_factor, facets, modes, mids))
+
+    def release_facets(self, facets: np.ndarray) -> None:
+        """Hold the broken local ``facets`` open from now on (collective).
+
+        The faces of a block cut loose from the rock (:mod:`hfcdem.solid.fragments`):
+        the fluid around it carries its faces, so it can no longer slide on them.
+        """
+        self.states.release(facets)
+        self.sync_ghost_states()
 
     def sync_ghost_states(self) -> None:
         """Owners decide; ghosts copy (states live on facets shared by two ranks)."""

@@ -3,14 +3,16 @@
 ``state`` is the failure state (0 intact, 1 tensile, 2 shear, as
 :class:`~hfcdem.solid.interfaces.FacetState`); ``contact`` the contact sub-state
 of a broken facet (open, stick, slip); ``friction_traction`` the Coulomb traction
-of a sliding facet on its ``+`` face.  Owners decide; ghosts copy.
+of a sliding facet on its ``+`` face; ``released`` the broken facets around a
+block cut loose from the rock, held open under the fluid that surrounds it
+(:mod:`hfcdem.solid.fragments`).  Owners decide; ghosts copy.
 A cascade of breaks that does not settle at a fixed load stops with
 :class:`CascadeStopped`; the states and breaks reached so far are kept.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import dolfinx
 import numpy as np
@@ -72,10 +74,15 @@ class InterfaceStates:
     state: np.ndarray  # (F,) int8 FacetState
     contact: np.ndarray  # (F,) int8 OPEN, STICK or SLIP
     friction_traction: np.ndarray  # (F, gdim) Pa, on the + face of sliding facets
+    released: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))  # (F,)
 
     def __post_init__(self) -> None:
         if not len(self.state) == len(self.contact) == len(self.friction_traction):
             raise ValueError("state, contact and friction_traction need one row per facet")
+        if len(self.released) == 0:
+            self.released = np.zeros(len(self.state), dtype=bool)
+        if len(self.released) != len(self.state):
+            raise ValueError("released needs one row per facet")
 
     @classmethod
     def initial(cls, is_crack: np.ndarray, gdim: int) -> InterfaceStates:
@@ -89,7 +96,10 @@ class InterfaceStates:
     def copy(self) -> InterfaceStates:
         """Return an independent copy (to restore after a rejected attempt)."""
         return InterfaceStates(
-            self.state.copy(), self.contact.copy(), self.friction_traction.copy()
+            self.state.copy(),
+            self.contact.copy(),
+            self.friction_traction.copy(),
+            self.released.copy(),
         )
 
     def restore(self, saved: InterfaceStates) -> None:
@@ -97,11 +107,20 @@ class InterfaceStates:
         self.state[:] = saved.state
         self.contact[:] = saved.contact
         self.friction_traction[:] = saved.friction_traction
+        self.released[:] = saved.released
 
     def break_facets(self, facets: np.ndarray, modes: np.ndarray) -> None:
         """Break ``facets`` in ``modes``: tensile breaks start open, shear breaks closed."""
         self.state[facets] = modes
         self.contact[facets] = np.where(modes == FacetState.TENSILE, OPEN, STICK)
+
+    def release(self, facets: np.ndarray) -> None:
+        """Hold broken ``facets`` open for good: a loose block's faces, under fluid."""
+        if np.any(self.state[facets] == FacetState.INTACT):
+            raise ValueError("only broken facets can be released")
+        self.released[facets] = True
+        self.contact[facets] = OPEN
+        self.friction_traction[facets] = 0.0
 
     def switch_contacts(
         self,
@@ -138,15 +157,17 @@ class InterfaceStates:
         )
 
     def sync_ghosts(self, imap: dolfinx.common.IndexMap, facets: np.ndarray) -> None:
-        """Copy the owners' state and contact to the ghosts of ``facets`` (collective)."""
-        vec = dolfinx.la.vector(imap, 2, dtype=np.float64)
-        arr = vec.array.reshape(-1, 2)
+        """Copy the owners' state, contact and release to the ghosts of ``facets`` (collective)."""
+        vec = dolfinx.la.vector(imap, 3, dtype=np.float64)
+        arr = vec.array.reshape(-1, 3)
         arr[:] = -1.0
         arr[facets, 0] = self.state
         arr[facets, 1] = self.contact
+        arr[facets, 2] = self.released
         vec.scatter_forward()
         self.state[:] = arr[facets, 0].astype(np.int8)
         self.contact[:] = arr[facets, 1].astype(np.int8)
+        self.released[:] = arr[facets, 2] > 0.5
 
 
 __all__ = ["OPEN", "SLIP", "STICK", "CascadeStopped", "InterfaceStates", "faces_overlap"]
