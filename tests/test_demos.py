@@ -2,6 +2,7 @@
 
 import importlib.util
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +19,56 @@ def load(name):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+# A YAML header that jupytext reads as the notebook's metadata (under `jupyter:`, or
+# it becomes a raw cell) naming the percent format, and that format's cell markers
+# (jupytext takes them indented too, and `# %%%` as a sub-cell).
+HEADER = re.compile(r"\A# ---\n((?:#.*\n)*?)# ---\n")
+JUPYTEXT_KEYS = re.compile(r"^# jupyter:\n#   jupytext:\n", re.M)
+PERCENT_FORMAT = re.compile(r"^#\s+(?:formats: .*py:percent|format_name: percent)\s*$", re.M)
+CELL_MARKER = re.compile(r"^[ \t]*#\s*%%+(?:\s(.*))?$", re.M)
+
+
+def literate_problems(text: str) -> list[str]:
+    """What keeps a demo's text from being a literate jupytext percent script."""
+    header = HEADER.match(text)
+    if not (
+        header and JUPYTEXT_KEYS.search(header.group(1)) and PERCENT_FORMAT.search(header.group(1))
+    ):
+        return ["does not start with a jupytext header naming the percent format"]
+    body = text[header.end() :]
+    markers = list(CELL_MARKER.finditer(body))
+    if not markers or body[: markers[0].start()].strip():
+        return ["has code before its first cell marker"]
+    markdown = [re.search(r"\[(markdown|md)\]", m.group(1) or "") is not None for m in markers]
+    problems = []
+    if not markdown[0]:
+        problems.append("starts with a code cell, not a markdown one")
+    elif not re.match(r"\s*# # \S", body[markers[0].end() :]):
+        problems.append("its first markdown cell has no title ('# # ...')")
+    if sum(markdown) < 2:
+        problems.append(f"has {sum(markdown)} markdown cell(s), fewer than 2")
+    if all(markdown):
+        problems.append("has no code cell")
+    return problems
+
+
+@pytest.mark.parametrize("path", sorted(DEMOS.glob("*.py")), ids=lambda p: p.stem)
+def test_demo_is_a_literate_script_that_compiles(path):
+    text = path.read_text()
+    compile(text, str(path), "exec")  # a SyntaxError names the line
+    assert literate_problems(text) == [], path.name
+
+
+def test_the_literate_check_rejects_a_plain_script_and_a_bare_header():
+    plain = '"""A demo."""\n\nprint(1)\n'
+    header = "# ---\n# jupyter:\n#   jupytext:\n#     formats: py:percent\n# ---\n\n"
+    assert literate_problems(plain)
+    assert literate_problems(header + plain) == ["has code before its first cell marker"]
+    one_cell = header + "# %% [markdown]\n# # Title\n\n# %%\nprint(1)\n"
+    assert literate_problems(one_cell) == ["has 1 markdown cell(s), fewer than 2"]
+    assert literate_problems(one_cell + "\n# %% [markdown]\n# More.\n") == []
 
 
 def test_borehole_kirsch_demo_writes_its_results(shared_tmp_path):
