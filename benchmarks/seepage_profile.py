@@ -94,6 +94,7 @@ def main() -> None:
         ("seepage Newton matrices set", r"seepage\.py:\d+\(_factorise\)"),
         ("seepage network solves (LU inside)", r"seepage\.py:\d+\(_solve\)"),
         ("solid solves", r"cdem\.py:\d+\(solve\)"),
+        ("debris search (loose blocks)", r"fragments\.py:\d+\(debris\)"),
         ("form compilation (ffcx)", r"jit\.py:\d+\(ffcx_jit\)"),
     ]
     for label, pattern in parts:

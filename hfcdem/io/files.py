@@ -207,6 +207,7 @@ def write_solid_results(out: Path, solid: Any, loads: Any, t: float = 0.0) -> di
         {
             "state": solid.state[own].astype(np.int32),
             "pre_existing": solid.is_crack[own].astype(np.int32),
+            "debris_face": solid.released[own].astype(np.int32),
             "opening": snap.opening[own],
             "normal_traction_MPa": snap.normal_traction[own] / 1e6,
             "shear_traction_MPa": snap.shear_traction[own] / 1e6,
