@@ -130,3 +130,20 @@ def test_a_pressure_that_only_falls_has_no_breakdown(plate):
     assert p[-1] < 5e6 * (1.0 - BREAKDOWN_DROP)  # it fell by more than the breakdown drop
     assert run.breakdown is None and not run.peak_cut_off
     assert run.peak_time == 0.0 and run.peak_pressure == pytest.approx(5e6)
+
+
+def test_a_cascade_of_breaks_is_not_a_state_loop_that_does_not_settle(plate):
+    """The breakdown step breaks 20 facets, one per pass: the budget counts passes per break.
+
+    With 4 passes allowed between two breaks the run is the default run to the
+    last digit; counted over the whole step (the old rule) it stopped at the
+    breakdown with 1 of the 20 facets broken.
+    """
+    pumping = CavityPumping(Q, 40.0, steps=100)
+    default = _pump(plate, 1e-9)
+    tight = pump_with_seepage(
+        _solid(plate), WALL, Fluid(viscosity=1.0), 1e-9, pumping, max_state_iterations=4
+    )
+    assert tight.stopped is None
+    assert tight.breakdown == default.breakdown and tight.steps == default.steps
+    assert (tight.tensile, tight.shear) == (default.tensile, default.shear) == (20, 0)

@@ -408,7 +408,10 @@ class _PumpedCavity:
         pressure, mode, location)`` of the most over-stressed facet when the
         step's first facets break (or None), and the highest cavity pressure of
         the step's states (the one at which the first facets break, before the
-        pressure drops).
+        pressure drops).  ``max_iterations`` bounds the passes between two
+        breaks: a cascade (breakdown, one facet per pass) may take any number,
+        since each break is for good, but contacts that keep switching or a
+        balance that keeps moving without a break stop the run.
         """
         solid = self.solid
         target = self.m0 + self.pumping.rate * (t + dt)
@@ -418,7 +421,9 @@ class _PumpedCavity:
         start_loads = self.loads(start_p, start_pj)
         u_start = solid.u.x.array.copy()
         saved, landings, broken, rounds, first, top = start_q, 0, 0, 0, None, -math.inf
-        for _ in range(max_iterations):
+        passes = 0  # since the last break
+        while passes < max_iterations:
+            passes += 1
             p = self.balance(dt, target, saved)
             loads = self.loads(p, self.seep.pressure)
             predicted = self.volume + self.slope * (p - self.p)
@@ -452,7 +457,7 @@ class _PumpedCavity:
             if first is None:
                 first = (p, *_worst_facet(solid, ratio, mode))
             solid.break_facets(chosen, mode[chosen], t + dt)
-            broken, rounds = broken + count, 0
+            broken, rounds, passes = broken + count, 0, 0
             self.release_debris(t + dt)
             cracks = self._joined_cracks()
             if solid.comm.allreduce(not np.array_equal(cracks, self.cracks), op=MPI.LOR):
@@ -465,7 +470,8 @@ class _PumpedCavity:
                 start_net, start_q = self.net, saved
             self.resolve(self.loads(p, self.seep.pressure))
         raise _Dry(
-            f"interface states did not settle in {max_iterations} iterations at t = {t + dt:.6g} s"
+            f"interface states did not settle in {max_iterations} iterations without a break "
+            f"at t = {t + dt:.6g} s ({broken} facets broke in the step)"
         )
 
     def _crossing(self, start: Loads, end: Loads, u_start: np.ndarray) -> float:
