@@ -25,11 +25,11 @@ def test_quick_report_of_sneddon_and_kgd_and_its_resume(shared_tmp_path, capsys)
     if MPI.COMM_WORLD.rank == 0:
         readme.write_text(f"# title\n{BEGIN}\nold table\n{END}\nafter\n")
     MPI.COMM_WORLD.barrier()
-    argv = ["reproduce", "--quick", "--only", "sneddon,kgd,rubin", "-o", str(out)]
+    argv = ["reproduce", "--quick", "--only", "sneddon,kgd,griffith", "-o", str(out)]
     assert main([*argv, "--readme", str(readme)]) == 0
     text = readme.read_text()
     assert "old table" not in text and text.endswith(f"{END}\nafter\n")
-    assert "| sneddon | crack-centre u_y |" in text and "| rubin | not modelled |" in text
+    assert "| sneddon | crack-centre u_y |" in text and "| griffith | not modelled |" in text
     printed = capsys.readouterr().out
     if MPI.COMM_WORLD.rank == 0:
         assert "[1/3] sneddon" in printed and "left in all" in printed
@@ -43,9 +43,9 @@ def test_quick_report_of_sneddon_and_kgd_and_its_resume(shared_tmp_path, capsys)
         assert row["met"] == "met", row
         assert abs(float(row["gap"].rstrip("%"))) < 8.0, row  # measured 6.6, 6.3, 2.6 %
     assert rows[("kgd", "breakdown peak")]["ours"] == "none"
-    assert rows[("rubin", "")]["status"] == "not modelled"
+    assert rows[("griffith", "")]["status"] == "not modelled"
     text = (out / "report.html").read_text()
-    assert "figures/sneddon_crack_opening.png" in text and "Rubin" in text
+    assert "figures/sneddon_crack_opening.png" in text and "Griffith" in text
     assert (out / "figures" / "gaps.png").stat().st_size > 5_000
     assert "| crack-centre u_y |" in (out / "report.md").read_text()
     first = json.loads((out / "cases" / "kgd" / "case.json").read_text())
@@ -96,7 +96,7 @@ def test_every_case_is_well_formed():
     names = [c.name for c in CASES]
     assert len(set(names)) == len(names)
     quick = select_cases("quick")
-    assert {"sneddon", "kgd", "hubbert_willis", "no2"} <= {c.name for c in quick}
+    assert {"sneddon", "kgd", "rubin", "hubbert_willis", "no2"} <= {c.name for c in quick}
     for case in CASES:
         if case.kind != "missing":
             assert (root / case.source).exists(), case.source

@@ -316,6 +316,30 @@ _KGD: dict[str, Any] = {
     },
 }
 
+# Seed hfdda sec. 4.3 (Rubin's PMMA experiment): the 305 mm x 96 mm inner area, a 30 mm
+# initial crack 0.1 cm wide (an open slot) and a path at 51 deg from each crack end;
+# triangles of at most 30 mm2 (just over 1800).  meshes/scenes/rubin_pmma.toml says why
+# the edges are free but for fixed corners and where the paths stop.
+_RUBIN: dict[str, Any] = {
+    "kind": "angled_path_plate",
+    "plate": {"width": "305 mm", "height": "96 mm"},
+    "crack": {
+        "length": "30 mm",
+        "width": "1 mm",
+        "path_length": "50 mm",
+        "path_angle": "51 deg",
+        "wings": "point",
+    },
+    "support": {"corners": "8 mm"},
+    "symmetry": "none",
+    "mesh": {
+        "size": "6.5 mm",
+        "size_far": "6.5 mm",
+        "path_size": "5 mm",
+        "resolutions": {"coarse": {"size": "12 mm", "size_far": "12 mm", "path_size": "7.5 mm"}},
+    },
+}
+
 # Seed pfc2d sec. 3.2 / seed 001: 1000 mm square, 60 mm borehole at the centre.  The
 # whole plate: a breakdown crack along SH (y = 0) must be interior facets, and a
 # quarter model makes y = 0 a roller.  Four structured rings of the wall size put
@@ -357,6 +381,7 @@ PRESETS: dict[str, dict[str, Any]] = {
     "sneddon_plate": _SNEDDON_PLATE,
     "kgd_strip": _KGD,
     "borehole_plate": _BOREHOLE,
+    "rubin_pmma": _RUBIN,
 }
 
 

@@ -40,7 +40,7 @@ from hfcdem.config.parts import (
     show_length,
     tunnel_extension,
 )
-from hfcdem.config.plates import BoreholeSquare, CrackPlate, KGDStrip
+from hfcdem.config.plates import AngledPathPlate, BoreholeSquare, CrackPlate, KGDStrip
 from hfcdem.config.tables import SceneError
 
 
@@ -304,7 +304,7 @@ class PerforatedBlock:
         return estimate_cells(self.mesh, volume, refined, 3)
 
 
-Geometry = PerforatedBlock | CrackPlate | KGDStrip | BoreholeSquare
+Geometry = PerforatedBlock | CrackPlate | KGDStrip | BoreholeSquare | AngledPathPlate
 
 
 @dataclass(frozen=True)
@@ -339,6 +339,7 @@ class Scene:
 
 
 __all__ = [
+    "AngledPathPlate",
     "BoreholeSquare",
     "CrackPlate",
     "Geometry",

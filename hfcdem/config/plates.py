@@ -257,4 +257,116 @@ class BoreholeSquare:
         return _estimate_plate_cells(self, self.wall_size, radius=self.wellbore.radius)
 
 
-__all__ = ["BoreholeSquare", "CrackPlate", "KGDStrip"]
+WINGS = ("point", "mirror")
+
+
+@dataclass(frozen=True)
+class AngledPathPlate:
+    """A 2D plate with a central initial crack along x and a straight path from each end.
+
+    The initial crack (tag ``crack``, total ``crack.length``) runs along x through
+    the injection point at the origin; from each of its ends a straight fracture
+    path (tag ``fracture_path``, ``path_length`` long each) leaves at
+    ``path_angle`` (rad) to the x axis.  ``wings``: ``"point"`` (the left path is
+    the right one turned by 180 degrees about the origin) or ``"mirror"`` (mirrored
+    in x = 0).  ``corner_support``: the length of each edge held fixed at each
+    corner (tag ``outer_corners``); the rest of the edges is free (tags
+    ``edge_xmin`` ...).  0: every edge fixed (tags ``outer_xmin`` ...).
+    ``slot_width`` > 0 makes the initial crack an open slot of that width (a
+    cavity, tag ``wellbore_wall``: one storage node loaded by its pressure, the
+    fluid injected into it) instead of a line of interior facets (tag ``crack``,
+    fluid entering at the origin).  ``mesh.path_size`` (default ``mesh.size``) is
+    the facet size along crack and paths.
+    """
+
+    plate: Plate
+    crack: Crack
+    mesh: MeshSizing
+    path_length: float
+    path_angle: float
+    wings: str = "point"
+    corner_support: float = 0.0
+    slot_width: float = 0.0
+    fracturable: FracturableZone | None = None
+    symmetry: tuple[str, ...] = ()
+
+    kind: ClassVar[str] = "angled_path_plate"
+    dim: ClassVar[int] = 2
+    injection_point: ClassVar[Vector] = (0.0, 0.0, 0.0)
+    crack_direction: ClassVar[Vector] = (1.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        if self.symmetry:
+            raise SceneError("symmetry", "an angled_path_plate is modelled whole: give 'none'")
+        if self.fracturable is not None:
+            raise SceneError(
+                "fracturable", "an angled_path_plate breaks along its paths only; remove it"
+            )
+        if self.wings not in WINGS:
+            raise SceneError("crack.wings", f"expected one of {', '.join(WINGS)}: {self.wings!r}")
+        if not 0.0 <= self.path_angle < 0.5 * np.pi:
+            raise SceneError(
+                "crack.path_angle", f"expected 0 to 90 deg, got {np.degrees(self.path_angle):g} deg"
+            )
+        if not self.path_length > 0.0:
+            raise SceneError("crack.path_length", "must be a positive length")
+        refuse_mesh_options(self.mesh, self.kind, ("wall_rings",))
+        end = self.path_end
+        margin = self.path_start
+        half = self.plate.half
+        if abs(end[0]) > half[0] - margin or abs(end[1]) > half[1] - margin:
+            raise SceneError(
+                "crack.path_length",
+                f"{show_length(self.path_length)} at {np.degrees(self.path_angle):g} deg ends at "
+                f"({show_length(end[0])}, {show_length(end[1])}): it must end a facet "
+                f"({show_length(margin)}) inside the plate",
+            )
+        limit = 0.5 * float(min(self.plate.width, self.plate.height))
+        if not 0.0 <= self.corner_support < limit:
+            raise SceneError(
+                "support.corners",
+                f"expected 0 to half the shorter side ({show_length(limit)}), "
+                f"got {show_length(self.corner_support)}",
+            )
+        if not 0.0 <= self.slot_width <= 0.25 * self.crack.length:
+            raise SceneError(
+                "crack.width",
+                f"expected 0 (a line) to a quarter of the crack length, "
+                f"got {show_length(self.slot_width)}",
+            )
+        _check_plate_mesh(self, 0.5 * self.crack.length, "half the initial crack")
+
+    @property
+    def path_start(self) -> float:
+        """Element size on the crack and the paths (where the grading starts)."""
+        return self.mesh.path_size if self.mesh.path_size is not None else self.mesh.size
+
+    @property
+    def direction(self) -> np.ndarray:
+        """Unit vector of the right path (x > 0)."""
+        return np.array([np.cos(self.path_angle), np.sin(self.path_angle)])
+
+    @property
+    def path_end(self) -> np.ndarray:
+        """End of the right path (x, y)."""
+        return np.array([0.5 * self.crack.length, 0.0]) + self.path_length * self.direction
+
+    def wing(self, side: int) -> tuple[np.ndarray, np.ndarray]:
+        """Start (the crack end) and unit direction of the path on ``side`` (+1 right, -1 left)."""
+        start = np.array([side * 0.5 * self.crack.length, 0.0])
+        d = self.direction
+        if side < 0:
+            d = -d if self.wings == "point" else np.array([-d[0], d[1]])
+        return start, d
+
+    def symmetric_axes(self) -> tuple[str, ...]:
+        """None: the plate is modelled whole."""
+        return ()
+
+    def estimated_cells(self) -> float:
+        """Rough number of triangles."""
+        line = self.crack.length + 2.0 * self.path_length
+        return _estimate_plate_cells(self, self.path_start, line=line)
+
+
+__all__ = ["AngledPathPlate", "BoreholeSquare", "CrackPlate", "KGDStrip"]

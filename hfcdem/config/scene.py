@@ -66,7 +66,7 @@ from hfcdem.config.parts import (
     show_length,
 )
 from hfcdem.config.physics import PHYSICS_SECTIONS, field_default, parse_physics
-from hfcdem.config.plates import BoreholeSquare, CrackPlate, KGDStrip
+from hfcdem.config.plates import AngledPathPlate, BoreholeSquare, CrackPlate, KGDStrip
 from hfcdem.config.tables import MISSING, SceneError, TomlTable, build_within
 from hfcdem.config.units import FieldError, join_path
 
@@ -294,6 +294,7 @@ _KIND_KEYS = {
     "crack_plate": ("plate", "crack"),
     "kgd_strip": ("plate", "crack"),
     "borehole_plate": ("plate", "wellbore"),
+    "angled_path_plate": ("plate", "crack", "support"),
 }
 
 
@@ -409,6 +410,10 @@ def _read_plate_scene(
     ct = top.table("crack")
     if ct is None:
         raise SceneError(top.sub("crack"), "missing; expected a table with length")
+    if kind == "angled_path_plate":
+        return _read_angled_plate(top, ct, plate, sizing, zone, axes)
+    if top.has("support"):
+        raise SceneError(top.sub("support"), f"not used by a {kind}")
     length = ct.quantity("length", "length")
     path_length = ct.quantity("path_length", "length", None) if kind == "kgd_strip" else None
     ct.finish()
@@ -416,6 +421,43 @@ def _read_plate_scene(
     if kind == "crack_plate":
         return build_within(top.path, CrackPlate, plate, crack, sizing, zone, axes)
     return build_within(top.path, KGDStrip, plate, crack, sizing, zone, axes)
+
+
+def _read_angled_plate(
+    top: TomlTable,
+    ct: TomlTable,
+    plate: Plate,
+    sizing: MeshSizing,
+    zone: FracturableZone | None,
+    axes: tuple[str, ...],
+) -> AngledPathPlate:
+    """``[crack]`` (length, width, path_length, path_angle, wings); ``[support]`` (corners)."""
+    length = ct.quantity("length", "length")
+    width = ct.quantity("width", "length", 0.0)
+    path_length = ct.quantity("path_length", "length")
+    angle = ct.quantity("path_angle", "angle")
+    wings = ct.string("wings", "point", ("point", "mirror"))
+    ct.finish()
+    crack = build_within(ct.path, Crack, length)
+    st = top.table("support")
+    corners = 0.0
+    if st is not None:
+        corners = st.quantity("corners", "length")
+        st.finish()
+    return build_within(
+        top.path,
+        AngledPathPlate,
+        plate,
+        crack,
+        sizing,
+        path_length,
+        angle,
+        wings,
+        corners,
+        width,
+        zone,
+        axes,
+    )
 
 
 def parse_scene(

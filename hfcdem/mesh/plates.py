@@ -35,12 +35,13 @@ import gmsh
 import numpy as np
 
 from hfcdem.config.parts import SlabZone, SphereZone
-from hfcdem.config.plates import BoreholeSquare, CrackPlate, KGDStrip
+from hfcdem.config.plates import AngledPathPlate, BoreholeSquare, CrackPlate, KGDStrip
+from hfcdem.mesh.angled import angled_measures, angled_residuals, build_angled_plate
 from hfcdem.mesh.block import element_quality
 from hfcdem.mesh.frames import Residual, kept_corners, plane_residual, slab_box
 from hfcdem.mesh.grading import add_grading, use_gradings
 
-Plate2D = CrackPlate | KGDStrip | BoreholeSquare
+Plate2D = CrackPlate | KGDStrip | BoreholeSquare | AngledPathPlate
 
 
 def _crack_lines(geom: Plate2D) -> dict[str, list[tuple[float, float]]]:
@@ -61,6 +62,8 @@ def _crack_lines(geom: Plate2D) -> dict[str, list[tuple[float, float]]]:
 
 def expected_measures(geom: Plate2D) -> dict[str, Any]:
     """Analytic area and line lengths of the modelled part of ``geom``."""
+    if isinstance(geom, AngledPathPlate):
+        return angled_measures(geom)
     lo, hi = kept_corners(geom.plate.half[:2], geom.symmetry)
     ext = hi - lo
     lengths: dict[str, float] = {}
@@ -97,6 +100,8 @@ def _add_zone(occ: Any, geom: Plate2D) -> tuple[int, int] | None:
 
 
 def curve_candidates(geom: Plate2D) -> list[tuple[str, Residual]]:
+    if isinstance(geom, AngledPathPlate):
+        return angled_residuals(geom)
     lo, hi = kept_corners(geom.plate.half[:2], geom.symmetry)
     out: list[tuple[str, Residual]] = []
     for i, axis in enumerate("xy"):
@@ -232,6 +237,8 @@ def _name_curves(geom: Plate2D, model: Any) -> dict[str, list[int]]:
 
 def build_plate(geom: Plate2D, model: Any) -> dict[str, Any]:
     """Create the geometry, physical groups and 2D mesh of ``geom`` in the Gmsh ``model``."""
+    if isinstance(geom, AngledPathPlate):
+        return build_angled_plate(geom, model)
     gmsh.option.setNumber("General.NumThreads", 1)
     cells = _plate_entities(geom, model.occ)
     model.occ.synchronize()
