@@ -547,7 +547,9 @@ class HydraulicFracture:
 
     def _record(self, t1: float, dt: float, vf: np.ndarray, its: int) -> StepRecord:
         stored_total = self.cavity_content + float(self.content.sum()) - self.initial_fluid
-        err = abs(self.injected - stored_total - self.leaked) / max(abs(self.injected), 1e-300)
+        # relative to the fluid in play: before a delayed pump starts, the initial fluid
+        scale = max(abs(self.injected), abs(self.initial_fluid), 1e-300)
+        err = abs(self.injected - stored_total - self.leaked) / scale
         counts = self.solid.broken_counts()
         return StepRecord(
             time=t1,
@@ -559,7 +561,7 @@ class HydraulicFracture:
             fracture_volume=float(np.maximum(vf, 0.0).sum()),
             leaked_volume=self.leaked,
             mass_error=err,
-            volume_mismatch=self.volume_mismatch / max(abs(self.injected), 1e-300),
+            volume_mismatch=self.volume_mismatch / scale,
             wet_facets=int(self.wet.sum()),
             tensile=counts["tensile"],
             shear=counts["shear"],

@@ -22,8 +22,8 @@ class StepRecord:
     fracture_fluid: float
     fracture_volume: float
     leaked_volume: float
-    mass_error: float  # |injected - fluid held - leaked| / injected (bookkeeping)
-    volume_mismatch: float  # |fluid held - compressed void volume| / injected (solver)
+    mass_error: float  # |injected - fluid held - leaked| / max(injected, initial fluid)
+    volume_mismatch: float  # |fluid held - compressed void volume|, same scale (solver)
     wet_facets: int
     tensile: int
     shear: int
