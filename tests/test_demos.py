@@ -23,7 +23,9 @@ def load(name):
 
 # A YAML header that jupytext reads as the notebook's metadata (under `jupyter:`, or
 # it becomes a raw cell) naming the percent format, and that format's cell markers
-# (jupytext takes them indented too, and `# %%%` as a sub-cell).
+# (jupytext takes them indented too, and `# %%%` as a sub-cell; an indented one is
+# rejected: it splits a block, so its code cannot run alone and its markdown reads as
+# an indented code block).
 HEADER = re.compile(r"\A# ---\n((?:#.*\n)*?)# ---\n")
 JUPYTEXT_KEYS = re.compile(r"^# jupyter:\n#   jupytext:\n", re.M)
 PERCENT_FORMAT = re.compile(r"^#\s+(?:formats: .*py:percent|format_name: percent)\s*$", re.M)
@@ -43,6 +45,10 @@ def literate_problems(text: str) -> list[str]:
         return ["has code before its first cell marker"]
     markdown = [re.search(r"\[(markdown|md)\]", m.group(1) or "") is not None for m in markers]
     problems = []
+    indented = [m for m in markers if m.group(0)[0] in " \t"]
+    if indented:
+        lines = [text.count("\n", 0, header.end() + m.start()) + 1 for m in indented]
+        problems.append(f"has cell markers inside a block (lines {lines})")
     if not markdown[0]:
         problems.append("starts with a code cell, not a markdown one")
     elif not re.match(r"\s*# # \S", body[markers[0].end() :]):
@@ -68,7 +74,10 @@ def test_the_literate_check_rejects_a_plain_script_and_a_bare_header():
     assert literate_problems(header + plain) == ["has code before its first cell marker"]
     one_cell = header + "# %% [markdown]\n# # Title\n\n# %%\nprint(1)\n"
     assert literate_problems(one_cell) == ["has 1 markdown cell(s), fewer than 2"]
-    assert literate_problems(one_cell + "\n# %% [markdown]\n# More.\n") == []
+    two_cells = one_cell + "\n# %% [markdown]\n# More.\n"
+    assert literate_problems(two_cells) == []
+    inside = two_cells + "\ndef f():\n    # %% [markdown]\n    # Inside.\n\n    # %%\n    pass\n"
+    assert literate_problems(inside) == ["has cell markers inside a block (lines [17, 20])"]
 
 
 def test_borehole_kirsch_demo_writes_its_results(shared_tmp_path):
