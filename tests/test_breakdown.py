@@ -48,3 +48,19 @@ def test_breakdown_note_says_why_there_is_none():
     assert breakdown_note(5 * t, None, open_crack=False).startswith("the pressure still rises")
     found = detect_breakdown(t, np.where(t < 6, 10 * t, 60 - 20 * (t - 6)))
     assert breakdown_note(np.where(t < 6, 10 * t, 60 - 20 * (t - 6)), found, False) is None
+
+
+def test_a_lower_peak_the_pressure_regains_is_not_the_breakdown():
+    # the Rubin case at its default mesh (history.csv, MPa): the slot-end facets break at
+    # 1.58 MPa, the pressure dips for three records, then rises to the breakdown at 6.23
+    t = [9.95, 10.05, 10.09, 10.15, 10.22, 10.31, 10.45, 10.67, 10.98, 11.46, 12.18, 13.18]
+    p = [1.380, 1.482, 1.576, 1.294, 1.401, 1.561, 1.801, 2.161, 2.700, 3.504, 4.686, 6.230]
+    t += [14.18, 15.18, 16.18, 17.18]
+    p += [4.969, 4.072, 3.6, 3.2]
+    found = detect_breakdown(t, p)
+    assert found is not None
+    assert found.pressure == pytest.approx(6.23e0) and found.time == 13.18
+    assert found.confirmed_at == 16.18
+    # cut before the second peak drops, the first dip alone is a (confirmed) breakdown
+    early = detect_breakdown(t[:8], p[:8])
+    assert early is not None and early.pressure == pytest.approx(1.576)

@@ -1,11 +1,13 @@
 """Breakdown: the peak injection pressure before a sustained drop.
 
-Criterion (causal, so it can run while the simulation steps): follow the running
-maximum of the injection pressure; breakdown is declared once the pressure has
-stayed below that maximum by at least ``drop_fraction`` of the rise
-``max - p_start`` for ``hold`` consecutive records (a sustained drop).  The
-breakdown pressure is that running maximum and its time the time of the peak.
-A history that never drops that far for that long has no breakdown (the
+Criterion: follow the running maximum of the injection pressure; a peak is
+confirmed once the pressure has stayed below that maximum by at least
+``drop_fraction`` of the rise ``max - p_start`` for ``hold`` consecutive records
+(a sustained drop).  The breakdown is the highest confirmed peak: an earlier,
+lower one that the pressure regains is a local event (the first facets at a
+stress concentration breaking and the cavity's volume jumping, as in the Rubin
+case, where such a dip at 1.6 MPa precedes the 6.2 MPa breakdown), not the
+breakdown.  A history that never drops that far for that long has no breakdown (the
 pressure is still rising, or only wobbles).  Nor has a history whose peak is
 its first record after the start: the rise to it is not resolved, and a run
 that starts from an open crack (KGD) only propagates, its pressure falling from
@@ -49,6 +51,7 @@ def detect_breakdown(
     start = p[0]
     peak, peak_index = p[0], 0
     below = 0
+    found: Breakdown | None = None
     for i in range(1, len(p)):
         if p[i] > peak:
             peak, peak_index, below = p[i], i, 0
@@ -56,11 +59,11 @@ def detect_breakdown(
         rise = peak - start
         below = below + 1 if rise > 0.0 and peak - p[i] >= drop_fraction * rise else 0
         # a peak on the first record is not confirmed: the rise to it is not resolved
-        if below >= hold and peak_index > 1:
-            return Breakdown(
+        if below >= hold and peak_index > 1 and (found is None or found.pressure < peak):
+            found = Breakdown(
                 pressure=float(peak), time=float(t[peak_index]), confirmed_at=float(t[i])
             )
-    return None
+    return found
 
 
 def breakdown_note(
