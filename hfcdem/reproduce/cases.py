@@ -21,6 +21,7 @@ from hfcdem.reproduce.compare import (
     Comparison,
     borehole_limit,
     four_charges,
+    griffith,
     kgd,
     lab_specimen,
     paper_trend,
@@ -132,12 +133,14 @@ CASES: tuple[Case, ...] = (
     Case(
         "griffith",
         "hfdda",
-        "Griffith crack with background stress (eq. 17)",
-        "missing",
-        None,
-        {"quick": Tier(), "full": Tier()},
-        note="checked in the suite (tests/test_cdem.py: opening of p - sigma0 to 1e-8), "
-        "not yet a scene of this report",
+        "Griffith crack with background stress (sec. 4.1, Table 1, eq. 17)",
+        "scene",
+        "meshes/scenes/griffith_plate.toml",
+        {"quick": Tier("coarse", estimate_s=3), "full": Tier(None, estimate_s=4)},
+        griffith,
+        discretisation="DG2; centre opening -4.12 / -3.78 / -3.55 % at h = 1 / 0.5 / "
+        "0.25 m (L/10 to L/40) on the 100 m plate: the plate's fixed edges dominate",
+        figures=("crack_opening.png",),
     ),
     Case(
         "rubin",

@@ -10,8 +10,10 @@ unstable crack: it runs to the boundary.  Growth is what an injection scene is
 for.)
 
 For a ``crack_plate`` scene the crack-face displacement is compared with
-Sneddon's infinite-plate solution (the paper's eq. 21) at the paper's 11
-monitoring points.
+Sneddon's infinite-plate solution (the perforation paper's eq. 21) at the
+paper's 11 monitoring points, under the net pressure: the crack pressure less
+the in-situ compression normal to the crack (Griffith with a background
+stress, the HFDDA paper's eq. 17).
 
 Written into DIR: ``summary.json``, ``crack_opening.csv`` and
 ``crack_opening.png`` (opening along the crack), ``fields.bp`` (displacement,
@@ -80,6 +82,16 @@ def crack_face_displacement(solid: CDEMSolid, x: np.ndarray, axis: int = 1) -> n
     return 0.5 * (
         evaluate_at_points(solid.u, up)[:, axis] - evaluate_at_points(solid.u, down)[:, axis]
     )
+
+
+def net_crack_pressure(scene: Scene) -> float:
+    """Crack pressure less the in-situ compression normal to the crack (Pa).
+
+    The crack of a ``crack_plate`` lies along x; the stress tensor is tension-positive.
+    """
+    assert scene.physics.load is not None
+    sigma = scene.physics.stress.tensor(2)
+    return float(scene.physics.load.crack_pressure + sigma[1, 1])
 
 
 def compare_sneddon(
@@ -157,12 +169,14 @@ def run_static(
     }
     reference = None
     if isinstance(scene.geometry, CrackPlate):
+        net = net_crack_pressure(scene)
         reference = compare_sneddon(
             solid,
             0.5 * scene.geometry.crack.length,
-            load.crack_pressure,
+            net,
             "x" in scene.geometry.symmetry,
         )
+        reference["net_pressure_MPa"] = net / 1e6
         for xi, ours, ref in reference["points"]:
             gap = f"{ours / ref - 1:+.2%}" if ref > 0 else "(tip)"
             say(f"x {xi:+.4f} m: u_y {ours * 1e6:8.3f} um, eq. (21) {ref * 1e6:8.3f} um {gap}")
@@ -195,16 +209,20 @@ def _plot_opening(
         fine = np.linspace(-a, a, 201)
         rock = scene.physics.rock
         exact = 0.5 * analytic.sneddon_opening(
-            fine, a, scene.physics.load.crack_pressure, rock.youngs_modulus, rock.poisson_ratio
+            fine, a, net_crack_pressure(scene), rock.youngs_modulus, rock.poisson_ratio
         )
         pts = np.asarray(reference["points"])
         curves += [
-            (fine, exact * 1e6, "Sneddon, eq. (21)", "k-"),
+            (fine, exact * 1e6, "Sneddon, eq. (21), under p - sigma_n", "k-"),
             (pts[:, 0], pts[:, 1] * 1e6, "hfcdem, monitoring points", "o"),
         ]
     if len(profile):
         curves.append((profile[:, 0], 0.5 * profile[:, 1] * 1e6, "hfcdem, facet midpoints", "."))
     title = f"{scene.name}: crack pressure {scene.physics.load.crack_pressure / 1e6:g} MPa"
+    if isinstance(scene.geometry, CrackPlate) and net_crack_pressure(scene) != (
+        scene.physics.load.crack_pressure
+    ):
+        title += f", net {net_crack_pressure(scene) / 1e6:g} MPa"
     ylabel = "crack-face displacement u_y = w / 2 (um)"
     plot_lines(path, curves, "x along the crack (m)", ylabel, title, MPI.COMM_SELF)
 
@@ -214,5 +232,6 @@ __all__ = [
     "StaticState",
     "compare_sneddon",
     "crack_face_displacement",
+    "net_crack_pressure",
     "run_static",
 ]
