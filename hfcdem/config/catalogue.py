@@ -296,6 +296,22 @@ _SNEDDON_PLATE: dict[str, Any] = {
     },
 }
 
+# Seed hfdda sec. 4.1 (Griffith with a background stress): a 20 m crack in the paper's
+# 100 m outer domain, its half x >= 0; h = L/20 at the crack (the paper's blocks are 1 m,
+# the coarse mesh's).
+_GRIFFITH_PLATE: dict[str, Any] = {
+    "kind": "crack_plate",
+    "plate": {"width": "100 m", "height": "100 m"},
+    "crack": {"length": "20 m"},
+    "symmetry": ["x"],
+    "mesh": {
+        "size": "0.5 m",
+        "size_far": "5 m",
+        "grading": 0.3,
+        "resolutions": {"coarse": {"size": "1 m", "size_far": "10 m"}},
+    },
+}
+
 # Seed hfdda sec. 4.2: 160 m x 160 m, injection at the origin, the fracture
 # may run 24 m each way; 1 m of each wing is opened at the start.  The crack and
 # the path are split into facets of exactly the wall size (path_size), as in the
@@ -379,6 +395,7 @@ PRESETS: dict[str, dict[str, Any]] = {
     "field_cluster": _CLUSTER,
     "crack_plate": _CRACK_PLATE,
     "sneddon_plate": _SNEDDON_PLATE,
+    "griffith_plate": _GRIFFITH_PLATE,
     "kgd_strip": _KGD,
     "borehole_plate": _BOREHOLE,
     "rubin_pmma": _RUBIN,
