@@ -67,6 +67,29 @@ def test_bad_study_input_is_named_before_running(shared_tmp_path, study_file):
         load_study(bad)
 
 
+def test_keys_moved_with_the_swept_one(shared_tmp_path, study_file):
+    text = study_file.read_text().replace(
+        "[set]", '[sweep.with]\n"injection.duration" = ["2 s", "1 s"]\n[set]'
+    )
+    text = text.replace('"injection.duration" = "3 s"\n', "")
+    moved = shared_tmp_path / "moved.toml"
+    _write(moved, text)
+    study = load_study(moved)
+    scenes = [study.case_scene(k) for k in range(2)]
+    assert [s.physics.duration for s in scenes] == [2.0, 1.0]
+    assert [s.physics.injection.points[-1][1] for s in scenes] == [1e-3, 4e-3]
+    with pytest.raises(SceneError, match=r"sweep\.values: 3 values, but sweep\.with moves"):
+        study.with_values(("1e-3 m3/s", "2e-3 m3/s", "4e-3 m3/s"))
+    MPI.COMM_WORLD.barrier()
+    _write(moved, text.replace('["2 s", "1 s"]', '["2 s"]'))
+    with pytest.raises(SceneError, match=r"sweep\.with\.injection\.duration: expected a list of 2"):
+        load_study(moved)
+    MPI.COMM_WORLD.barrier()
+    _write(moved, text.replace("[sweep.with]", "[sweep.also]"))
+    with pytest.raises(SceneError, match=r"sweep\.also: unknown key"):
+        load_study(moved)
+
+
 def test_set_indexes_arrays_of_tables():
     doc = {"geometry": {"perforations": [{"profile": "no2"}, {"profile": "no1"}]}}
     _set(doc, "geometry.perforations.1.profile", "1-1")

@@ -11,8 +11,11 @@ and optional fixed overrides::
     parameter = "injection.rate"
     values = ["1e-3 m3/s", "2e-3 m3/s", "4e-3 m3/s"]
 
+    [sweep.with]                                # optional: keys moved with the swept
+    "injection.duration" = ["8 s", "4 s", "2 s"]  # one, a value per case
+
     [set]                                       # optional, applied to every case
-    "injection.duration" = "5 s"
+    "fluid.viscosity" = "1 mPa.s"
 
 ``hfcdem study STUDY.toml -o DIR`` runs the cases into ``DIR/case_K_VALUE``
 (``case_1_1-1``, ``case_0_30_deg``) one after another, or ``--groups G`` at
@@ -55,11 +58,18 @@ class Study:
     values: tuple[Any, ...]
     fixed: Mapping[str, Any]
     resolution: str | None = None
+    together: Mapping[str, tuple[Any, ...]] = dataclasses.field(default_factory=dict)
 
     def with_values(self, values: tuple[Any, ...]) -> Study:
         """Return the study with other swept values (validated)."""
         if not values:
             raise SceneError("sweep.values", "expected a non-empty list")
+        if self.together and len(values) != len(self.values):
+            raise SceneError(
+                "sweep.values",
+                f"{len(values)} values, but sweep.with moves "
+                f"{', '.join(self.together)} with {len(self.values)}",
+            )
         study = dataclasses.replace(self, values=tuple(values))
         for k in range(len(study.values)):
             study.case_scene(k)
@@ -78,6 +88,8 @@ class Study:
         for key, value in self.fixed.items():
             _set(doc, key, value)
         _set(doc, self.parameter, self.values[k])
+        for key, values in self.together.items():
+            _set(doc, key, values[k])
         return doc
 
     def case_scene(self, k: int) -> Scene:
@@ -135,6 +147,18 @@ def load_study(path: str | Path, resolution: str | None = None) -> Study:
     fixed = data.get("set", {})
     if not isinstance(fixed, dict):
         raise SceneError("set", "expected a table of dotted keys")
+    for key in sweep:
+        if key not in ("parameter", "values", "with"):
+            raise SceneError(f"sweep.{key}", "unknown key; a sweep takes: parameter, values, with")
+    together = sweep.get("with", {})
+    if not isinstance(together, dict):
+        raise SceneError("sweep.with", "expected a table of dotted keys, each with a list")
+    for key, moved in together.items():
+        if not isinstance(moved, list) or len(moved) != len(values):
+            raise SceneError(
+                f"sweep.with.{key}",
+                f"expected a list of {len(values)} values, one per swept value",
+            )
     study = Study(
         name=str(data.get("name", p.stem)),
         scene_path=scene_path,
@@ -143,6 +167,7 @@ def load_study(path: str | Path, resolution: str | None = None) -> Study:
         values=tuple(values),
         fixed=fixed,
         resolution=resolution or data.get("resolution"),
+        together={key: tuple(v) for key, v in together.items()},
     )
     for k in range(len(values)):
         study.case_scene(k)  # bad input stops here, before any meshing
