@@ -281,7 +281,10 @@ class HydraulicFracture:
         kw = self.fluid.bulk_modulus
         self.cavity_content = float(max(float(vc), 0.0) * (1.0 + p[0] / kw))
         wet = self.group >= 0
-        self.content[wet] = vf[wet] * (1.0 + p[0] / kw)
+        # a pre-existing crack the in-situ stress presses shut (its faces overlap in the
+        # linear model: no contact on pre-existing cracks) holds no fluid; the fluid opens
+        # it once its pressure exceeds the stress across it
+        self.content[wet] = np.maximum(vf[wet], 0.0) * (1.0 + p[0] / kw)
         self.pressure[wet] = p[0]
         self.initial_fluid = self.cavity_content + float(self.content.sum())
         self._store_state()

@@ -101,7 +101,12 @@ def snes_solve(
         batch = p[:, None] + np.diag(step)
         r0 = residual(p, None)
         rb = residual(batch, None)
-        J.getDenseArray()[:] = (rb - r0[:, None]) / step[None, :]
+        jac = (rb - r0[:, None]) / step[None, :]
+        # a group with no storage and no flow (the zero-volume cavity of a point injection
+        # at dt = 0) is a zero row and column: keep its pressure, solve the others
+        idle = ~jac.any(axis=0) & ~jac.any(axis=1)
+        jac[idle, idle] = 1.0
+        J.getDenseArray()[:] = jac
         J.assemble()
 
     snes.setFunction(function, f)

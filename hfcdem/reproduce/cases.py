@@ -30,6 +30,11 @@ from hfcdem.reproduce.compare import (
     sneddon,
     trend,
 )
+from hfcdem.reproduce.kgd_series import (
+    kgd_series,
+    longer_step_runs_further,
+    stress_worsens_coarse,
+)
 from hfcdem.reproduce.rubin import rubin
 
 TIERS = ("quick", "full")
@@ -129,6 +134,39 @@ CASES: tuple[Case, ...] = (
         discretisation="benchmarks/kgd_verification.py: dx 0.5 m on a 400 m plate: "
         "l -0.6 %, p +2.8 %, w -0.1 %",
         figures=("pressure.png",),
+    ),
+    Case(
+        "kgd_mesh",
+        "hfdda",
+        "KGD mesh series, no background stress (sec. 4.2, Fig. 8)",
+        "study",
+        "studies/kgd_mesh.toml",
+        {"quick": Tier(estimate_s=8), "full": Tier(estimate_s=8)},
+        kgd_series("dx", None, "Fig. 8"),
+        discretisation="the series is the mesh study: dx = 4 -> 0.5 m along the path",
+        figures=("series.png",),
+    ),
+    Case(
+        "kgd_mesh_stress",
+        "hfdda",
+        "KGD mesh series, 5 MPa background stress (sec. 4.2, Fig. 9)",
+        "study",
+        "studies/kgd_mesh_stress.toml",
+        {"quick": Tier(estimate_s=9), "full": Tier(estimate_s=9)},
+        kgd_series("dx", stress_worsens_coarse, "Fig. 9"),
+        discretisation="the series is the mesh study: dx = 4 -> 0.5 m along the path",
+        figures=("series.png",),
+    ),
+    Case(
+        "kgd_time_step",
+        "hfdda",
+        "KGD time-step series at dx = 0.5 m (sec. 4.2, Fig. 10)",
+        "study",
+        "studies/kgd_time_step.toml",
+        {"quick": Tier(estimate_s=20), "full": Tier(estimate_s=20)},
+        kgd_series("dt", longer_step_runs_further, "Fig. 10"),
+        discretisation="the series is the time-step study: dt = 2 -> 0.25 s",
+        figures=("series.png",),
     ),
     Case(
         "griffith",

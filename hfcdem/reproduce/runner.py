@@ -291,7 +291,12 @@ def _execute(
         scenes = tuple(study.case_scene(k) for k in range(len(study.values)))
         skipped = not force and _all_done(study, scenes, where, keep_stopped=True)
         rows = run_study(study, where, comm, force=force, say=say, keep_stopped=True)
-        text = _size_text(characteristic_size(scenes[0]), study.resolution, rows[0].get("cells"))
+        sizes = [characteristic_size(sc) for sc in scenes]
+        text = _size_text(sizes[0], study.resolution, rows[0].get("cells"))
+        if len(set(sizes)) > 1:  # a mesh series: its range
+            cells = [r.get("cells") for r in rows]
+            span = f", {cells[0]:,} -> {cells[-1]:,} cells" if None not in cells else ""
+            text = f"h = {sizes[0] * 1e3:.4g} -> {sizes[-1] * 1e3:.4g} mm{span}"
         return CaseResult(where, scenes, rows=tuple(rows)), text, skipped
     conv = load_convergence(path, resolution)
     if tier.values:
