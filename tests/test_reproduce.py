@@ -10,8 +10,8 @@ from mpi4py import MPI
 from hfcdem.cli import main
 from hfcdem.reproduce.cases import CASES, select_cases
 from hfcdem.reproduce.compare import CaseResult, Comparison, trend
-from hfcdem.reproduce.report import BEGIN, END, update_readme
-from hfcdem.reproduce.runner import case_status, run_reproduction
+from hfcdem.reproduce.report import BEGIN, END, summary_table, update_readme
+from hfcdem.reproduce.runner import CaseRecord, case_status, run_reproduction
 
 
 def _rows(path):
@@ -143,6 +143,17 @@ def test_comparison_rows_judge_gaps_and_trends(tmp_path):
     rows = ({"x": 1, "breakdown_pressure_MPa": 10.0}, {"x": 2, "breakdown_pressure_MPa": None})
     (lonely,) = trend("b", "rises", True, 1.0, "")(CaseResult(tmp_path, (), rows=rows))
     assert lonely.met is False and "fewer than two" in lonely.note
+
+
+@pytest.mark.serial
+def test_the_summary_puts_the_unit_after_numbers_not_after_texts():
+    text = {"unit": "%", "ours_text": "0.08 %", "reference_text": "<= 10 %", "agrees": True}
+    rows = (Comparison("p", 10.45, 10.0, "MPa", tolerance=0.05), Comparison("g", 0.08, **text))
+    record = CaseRecord("c", "perforation", "t", "ok", rows, resolution="coarse")
+    meta = {"tier": "quick", "fidelity": "scene", "date": "d", "commit": "x", "ranks": 1}
+    table = summary_table([record], meta)
+    assert "| 10 MPa | 10.45 MPa |" in table
+    assert "| <= 10 % | 0.08 % |" in table and "% %" not in table
 
 
 @pytest.mark.serial

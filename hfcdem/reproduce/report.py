@@ -90,6 +90,15 @@ def _rows(records: Sequence[CaseRecord]) -> list[dict[str, str]]:
     return rows
 
 
+def _with_unit(value: str, unit: str) -> str:
+    """``value unit`` for a number; a text (e.g. "at most 0 MPa") carries its own unit."""
+    try:
+        float(value)
+    except ValueError:
+        return value
+    return f"{value} {unit}" if unit else value
+
+
 def _counts(records: Sequence[CaseRecord]) -> dict[str, int]:
     every = [c for r in records for c in r.comparisons]
     return {
@@ -143,8 +152,8 @@ def summary_table(records: Sequence[CaseRecord], meta: Mapping[str, Any]) -> str
                 row["case"]
                 + (f" ({STATUS_TEXT[row['status']]})" if row["status"] in STATUS_TEXT else ""),
                 row["quantity"] or row["status"],
-                row["reference"] + (f" {row['unit']}" if row["unit"] and row["reference"] else ""),
-                row["ours"] + (f" {row['unit']}" if row["unit"] and row["ours"] else ""),
+                _with_unit(row["reference"], row["unit"]),
+                _with_unit(row["ours"], row["unit"]),
                 row["gap"],
                 row["target"],
                 row["met"],
