@@ -189,8 +189,7 @@ def borehole_limit(wet: bool) -> Callable[[CaseResult], list[Comparison]]:
         if len(done) >= 2 and math.isclose(done[1][0], 2.0 * done[0][0], rel_tol=1e-6):
             rows.append(
                 Comparison("first break, first-order extrapolation", 2 * done[0][1] - done[1][1],
-                           ref, "MPa", source, note="2 P(h) - P(2h): assumes order 1, which "
-                           "the three meshes do not show")
+                           ref, "MPa", source, note="2 P(h) - P(2h): order 1 assumed")
             )  # fmt: skip
         return rows
 
