@@ -9,10 +9,13 @@ lower.
 import json
 from pathlib import Path
 
+import meshio
 import pytest
+from mpi4py import MPI
 
 from hfcdem.config.scene import load_scene
 from hfcdem.config.tables import SceneError
+from hfcdem.io.series import read_pvd
 from hfcdem.mesh.build import create_scene_mesh
 from hfcdem.solid.forms import Loads
 from hfcdem.workflows.run import build_solid, run_scene
@@ -142,5 +145,15 @@ def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
     assert summary["max_mass_error"] < 1e-9
     rows = (shared_tmp_path / "pumped" / "history.csv").read_text().splitlines()
     assert rows[0].startswith("time_s,cavity_pressure_Pa") and len(rows) > 200
+    # the joints over time (Fig. 14): the start and every 1 s (duration / 20) to 20 s
+    frames = read_pvd(shared_tmp_path / "pumped" / "joints.pvd")
+    assert len(frames) == 21 and frames[0][0] == 0.0
+    assert [t for t, _ in frames[1:]] == pytest.approx(range(1, 21), abs=0.1)  # 0.1 s steps
+    if MPI.COMM_WORLD.rank == 0:
+        first, last = (
+            meshio.read(shared_tmp_path / "pumped" / f[1]) for f in (frames[0], frames[-1])
+        )
+        assert first.cell_data["saturation"][0].mean() < last.cell_data["saturation"][0].mean()
+        assert first.cell_data["state"][0].max() == 0.0 < last.cell_data["state"][0].max()
     with pytest.raises(SceneError, match=r"injection\.wall_film"):
         seepage_loading(load_scene(PUMPING, "coarse", overrides={"injection.wall_film": "5 um"}))

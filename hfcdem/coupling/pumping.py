@@ -68,6 +68,9 @@ from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import OPEN, CascadeStopped
 from hfcdem.solvers import ValidityLimit
 
+#: called with the time, the fluid pressure and the saturation per local facet
+Frames = Callable[[float, np.ndarray, np.ndarray], None]
+
 #: a peak counts as the breakdown once the pressure has fallen this fraction below it
 BREAKDOWN_DROP = 0.01
 
@@ -143,12 +146,15 @@ def pump_with_seepage(
     pumping: CavityPumping,
     progress: Callable[[str], None] | None = None,
     max_state_iterations: int = 200,
+    frames: Frames | None = None,
 ) -> PumpingResult:
     """Pump into the ``cavity`` facet groups and follow breaks and pressure (collective).
 
     ``solid`` in the full mode; ``aperture``: hydraulic aperture of the joints
     (m).  Runs for ``pumping.duration`` in ``pumping.steps`` steps (more where
-    a step is shortened onto a break).
+    a step is shortened onto a break).  ``frames`` is called (collectively) at
+    the start and after every step with the time and the fluid pressure and
+    saturation per local facet (:meth:`_PumpedCavity.fields`).
     """
     if solid.mode != "full":
         raise ValueError("pump_with_seepage needs CDEMSolid(mode='full') (pressure on glued faces)")
@@ -167,7 +173,7 @@ def pump_with_seepage(
         )  # fmt: skip
     run = _PumpedCavity(solid, tuple(cavity), fluid, aperture, pumping)
     try:
-        return run.run(initial_failures, progress, max_state_iterations)
+        return run.run(initial_failures, progress, max_state_iterations, frames)
     finally:
         run.seep.destroy()
 
@@ -278,6 +284,14 @@ class _PumpedCavity:
     def joint_content(self) -> float:
         """Fluid in the seepage network (m^3 at zero pressure)."""
         return float(self.seep.content.sum())
+
+    def fields(self) -> tuple[np.ndarray, np.ndarray]:
+        """Fluid pressure (Pa) and saturation per local facet; the joined cracks at the cavity's."""
+        sat = self.per_facet(self.seep.saturation)
+        sat[self.cracks] = 1.0
+        pj = self.per_facet(self.seep.pressure)
+        pj[self.cracks] = self.p
+        return pj, sat
 
     def per_facet(self, values: np.ndarray) -> np.ndarray:
         """Network values on the solid's local facets (0 on the cracks joined to the cavity)."""
@@ -501,6 +515,7 @@ class _PumpedCavity:
         initial_failures: int,
         progress: Callable[[str], None] | None,
         max_iterations: int,
+        frames: Frames | None = None,
     ) -> PumpingResult:
         """Pump for the whole duration; return the result."""
         solid, pumping = self.solid, self.pumping
@@ -510,6 +525,8 @@ class _PumpedCavity:
         peak, peak_time, stopped, limit = self.p, 0.0, None, False
         breakdown: tuple[float, float] | None = None
         every = max(1, pumping.steps // 10)
+        if frames is not None:
+            frames(t, *self.fields())
         while t < pumping.duration * (1.0 - 1e-12):
             dt = min(pumping.dt, pumping.duration - t)
             try:
@@ -521,6 +538,8 @@ class _PumpedCavity:
                 stopped, limit = str(stop), True
                 break
             t, n = t + dt, n + 1
+            if frames is not None:
+                frames(t, *self.fields())
             if worst is not None and first is None:
                 first = (worst[0], t, worst[1], worst[2])
             held = self.volume * (1.0 + self.p / self.kw) + self.joint_content()
@@ -549,10 +568,7 @@ class _PumpedCavity:
                     f"cracks joined to the cavity {crack:.3g} m^3"
                 )
         counts = solid.broken_counts()
-        sat = self.per_facet(self.seep.saturation)
-        sat[self.cracks] = 1.0
-        pj = self.per_facet(self.seep.pressure)
-        pj[self.cracks] = self.p
+        pj, sat = self.fields()
         return PumpingResult(
             first_pressure=None if first is None else first[0],
             first_time=None if first is None else first[1],

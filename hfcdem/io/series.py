@@ -10,6 +10,7 @@ rewritten after each, so a stopped run keeps every frame it wrote.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -73,6 +74,43 @@ class FieldSeries:
         self._writer.close()
 
 
+class InterfaceFrames:
+    """Interface frames at output times: ``DIR/STEM/frame_K.vtu`` listed in ``DIR/STEM.pvd``.
+
+    :meth:`offer` writes the first state offered and then the first at or
+    after each time ``k * interval`` (and ``t_end``); each frame is written
+    atomically and the PVD rewritten after it, so a stopped run keeps its
+    frames.  Collective.
+    """
+
+    def __init__(self, out: Path, stem: str, t_end: float, interval: float, comm: Any) -> None:
+        if not (interval > 0.0):
+            raise ValueError(f"output interval must be a positive time (s), got {interval!r}")
+        self.out, self.stem, self.comm = out, stem, comm
+        self.frames: list[tuple[float, str]] = []
+        self._times = iter(output_times(0.0, t_end, interval))
+        self.due = 0.0
+        if comm.rank == 0:
+            (out / stem).mkdir(exist_ok=True)
+            for stale in (out / stem).glob("frame_*.vtu"):  # an earlier run's (--force)
+                stale.unlink()
+        comm.barrier()
+
+    def offer(self, t: float, points: np.ndarray, data: dict[str, np.ndarray]) -> bool:
+        """Write ``data`` on the interfaces ``points`` at ``t`` if an output time is due."""
+        if t < self.due * (1.0 - 1e-12):
+            return False
+        name = f"{self.stem}/frame_{len(self.frames):04d}.vtu"
+        write_interfaces(self.out / name, points, data, self.comm)
+        self.frames.append((t, name))
+        if self.comm.rank == 0:
+            write_atomic(self.out / f"{self.stem}.pvd", pvd_text(self.frames))
+        self.comm.barrier()
+        while self.due <= t * (1.0 + 1e-12):
+            self.due = next(self._times, math.inf)
+        return True
+
+
 def pvd_text(frames: list[tuple[float, str]]) -> str:
     rows = "\n".join(
         f'    <DataSet timestep="{t:.10g}" group="" part="0" file="{name}"/>' for t, name in frames
@@ -107,5 +145,6 @@ def output_times(t_start: float, t_end: float, interval: float) -> np.ndarray:
 
 __all__ = [
     "FieldSeries",
+    "InterfaceFrames",
     "output_times",
 ]

@@ -20,6 +20,9 @@ and the breakdown is the peak before the drop (``summary.json`` kind
 Written: ``summary.json``, ``history.csv`` (cavity pressure and fluid in the
 joints per step), ``joints.vtu`` (saturation and pressure of every joint at the
 break or the end, and the interface states, for ParaView) and ``pressure.png``.
+A pumped run also writes ``joints.pvd``: the same fields over time
+(``joints/frame_K.vtu``, every ``output.interval``, by default 20 frames),
+where the seepage front and the cracks can be watched move (the paper's Fig. 14).
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakd
 from hfcdem.coupling.pumping import BREAKDOWN_DROP, PumpingResult, pump_with_seepage
 from hfcdem.io.files import write_csv, write_interfaces, write_json
 from hfcdem.io.plots import plot_lines
+from hfcdem.io.series import InterfaceFrames
 from hfcdem.solid.cdem import CDEMSolid
 
 _MODES = {1: "tensile", 2: "shear"}
@@ -181,12 +185,19 @@ def _write_joints(
     path: Path, solid: CDEMSolid, pressure: np.ndarray | None, saturation: np.ndarray | None
 ) -> None:
     """Write every owned joint's saturation, pressure and state (per local facet) as VTU."""
+    write_interfaces(path, *_joint_fields(solid, pressure, saturation), solid.comm)
+
+
+def _joint_fields(
+    solid: CDEMSolid, pressure: np.ndarray | None, saturation: np.ndarray | None
+) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Owned facets' vertices and their saturation, pressure (Pa) and state."""
     own = solid.owned
     zero = np.zeros(solid.num_facets)
     pj = pressure if pressure is not None else zero
     sat = saturation if saturation is not None else zero
     data = {"saturation": sat[own], "pressure": pj[own], "state": solid.state[own].astype(float)}
-    write_interfaces(path, solid.vertex_coords[own], data, solid.comm)
+    return solid.vertex_coords[own], data
 
 
 def _first_crack(location: np.ndarray | None, mode: int | None) -> dict[str, Any] | None:
@@ -210,8 +221,14 @@ def _run_pumped(
 ) -> dict[str, Any]:
     """Pump for the scene's duration past the first break; write the results into ``out``."""
     phys, comm = scene.physics, solid.comm
+    interval = phys.output_interval or pumping.duration / 20.0
+    series = InterfaceFrames(out, "joints", pumping.duration, interval, comm)
+
+    def frame(t: float, pressure: np.ndarray, saturation: np.ndarray) -> None:
+        series.offer(t, *_joint_fields(solid, pressure, saturation))
+
     result = pump_with_seepage(
-        solid, cavity, phys.fluid, phys.joint_aperture, pumping, progress=say
+        solid, cavity, phys.fluid, phys.joint_aperture, pumping, progress=say, frames=frame
     )
     if result.stopped:
         say(f"stopped: {result.stopped}")
