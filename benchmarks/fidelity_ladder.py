@@ -1,0 +1,99 @@
+"""The fidelity ladder on Perforation No. 2: the answer and the cost of each rung.
+
+Runs No. 2 (``meshes/scenes/perforation_no2.toml``) for its whole injection at
+one resolution, one rung after another, and prints a table: peak or breakdown
+pressure, first tensile break, failures, steps, wall time.  The rungs:
+
+- ``uniform``: the scene as shipped (one pressure in the cavity and its
+  cracks; the calibrated 5 um wall film, the paper's Kw = 10 MPa, joints along
+  the walls and cracks "permeated": at the cavity pressure from the start);
+- ``uniform-water``: the same with water's Kw = 2.2 GPa and no film: what the
+  calibration of the film and Kw does;
+- ``viscous``: one pressure per wet facet (``solver.fidelity = "viscous"``),
+  otherwise as shipped;
+- ``seepage``: the joints of the fracturable zone fill in time from dry
+  (``wall_joints = "seepage"``, 1 um hydraulic aperture), water, no film: no
+  knob of the joints' fluid left.
+
+    make run CMD="python3 benchmarks/fidelity_ladder.py --rungs uniform uniform-water viscous"
+    make run CMD="python3 benchmarks/fidelity_ladder.py --rungs seepage"   # about 20 min coarse
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import tempfile
+import time
+from pathlib import Path
+
+from mpi4py import MPI
+
+from hfcdem.config.scene import load_scene
+from hfcdem.workflows.run import run_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+RUNGS = ("uniform", "uniform-water", "viscous", "seepage")
+
+
+def scene_text(rung: str) -> str:
+    """No. 2's scene file for ``rung``."""
+    text = (ROOT / "meshes/scenes/perforation_no2.toml").read_text()
+    if rung in ("uniform-water", "seepage"):
+        text = re.sub(r"(?m)^wall_film = .*\n", "", text)
+        text = re.sub(r'(?m)^bulk_modulus = "[^"]*"', 'bulk_modulus = "2.2 GPa"', text)
+    if rung == "seepage":
+        text = re.sub(r'(?m)^wall_joints = "[a-z]+"', 'wall_joints = "seepage"', text)
+    if rung == "viscous":
+        text = re.sub(r'(?m)^fidelity = "[a-z]+"', 'fidelity = "viscous"', text)
+    return text.replace('name = "perforation_no2"', f'name = "no2_{rung.replace("-", "_")}"')
+
+
+def _pressure(summary: dict, key: str) -> str:
+    v = summary.get(key)
+    return f"{v:.2f}" if isinstance(v, int | float) else "-"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--rungs", nargs="+", choices=RUNGS, default=list(RUNGS[:3]))
+    ap.add_argument("--resolution", default="coarse")
+    args = ap.parse_args()
+    comm = MPI.COMM_WORLD
+    rows = []
+    for rung in args.rungs:
+        with tempfile.TemporaryDirectory() as tmp:
+            tmp = comm.bcast(tmp, root=0)
+            path = Path(tmp) / f"{rung}.toml"
+            if comm.rank == 0:
+                path.write_text(scene_text(rung))
+            comm.barrier()
+            t0 = time.perf_counter()
+            s = run_scene(load_scene(path, args.resolution), Path(tmp) / "out", force=True)
+            wall = time.perf_counter() - t0
+            comm.barrier()
+        rows.append(
+            (
+                rung,
+                _pressure(s, "breakdown_pressure_MPa"),
+                _pressure(s, "peak_pressure_MPa") + (" (cut off)" if s.get("peak_cut_off") else ""),
+                _pressure(s, "first_crack_pressure_MPa"),
+                f"{s.get('tensile_failures', '-')} / {s.get('shear_failures', '-')}",
+                str(s.get("steps", "-")),
+                f"{wall:.0f}",
+                str(s.get("stopped") or ""),
+            )
+        )
+        if comm.rank == 0:
+            print(f"{rung}: done in {wall:.0f} s: " + " | ".join(rows[-1][1:]), flush=True)
+    if comm.rank == 0:
+        head = ("rung", "breakdown MPa", "peak MPa", "first break MPa", "tensile / shear",
+                "steps", "wall s", "stopped")  # fmt: skip
+        print("| " + " | ".join(head) + " |")
+        print("|" + "---|" * len(head))
+        for row in rows:
+            print("| " + " | ".join(row) + " |")
+
+
+if __name__ == "__main__":
+    main()
