@@ -18,10 +18,14 @@ in ``P`` at fixed interface states (its slope from a unit solve); ``J`` the
 joints' content after the seepage step with the cavity at ``P``.  ``P`` and
 the joints are one Newton (:meth:`JointSeepage.step_pumped`); a bracketed
 secant on trial seepage steps is the fallback where that Newton fails.
-The solid is then solved at ``P`` with the joint pressures and ``V``
-measured; the balance is repeated until the measured volume is the balanced
-one, so the fluid is conserved at the solved state (the joint pressures'
-pull on the walls is the only lag, and it is iterated out).  Contacts switch
+``V`` follows the joints' pressures too: by reciprocity ``dV/dp_j`` of a
+joint is its volume change under a unit cavity pressure
+(:func:`cavity_joint_coupling`, from the same unit solve), so the balance
+predicts the walls the joints push.  The solid is then solved at ``P`` with
+the joint pressures and ``V`` measured; the balance is repeated until the
+measured volume is the balanced one, so the fluid is conserved at the solved
+state (what is left to iterate: joints that start or stop holding pressure
+within the step, contacts that switch).  Contacts switch
 and interfaces break as in the coupled step, each change followed by a new
 balance in the same step, so the pressure drops as a crack joined to the
 cavity opens.  A step in which an interface would cross its envelope is
@@ -112,7 +116,9 @@ class PumpingResult:
     the run stopped where the small-displacement solid no longer holds
     (``stopped`` says where), its history up to there standing;
     ``debris_cells``: cells of the blocks cut loose from the walls, whose faces
-    the fluid took (:mod:`hfcdem.solid.fragments`).
+    the fluid took (:mod:`hfcdem.solid.fragments`); ``rebalances``: balances
+    repeated because the solved volume was not the balanced one;
+    ``solid_solves``: the solid's solves during pumping.
     """
 
     first_pressure: float | None
@@ -136,6 +142,8 @@ class PumpingResult:
     validity_limit: bool = False
     secant_balances: int = 0
     debris_cells: int = 0
+    rebalances: int = 0
+    solid_solves: int = 0
 
 
 def pump_with_seepage(
@@ -178,6 +186,21 @@ def pump_with_seepage(
         run.seep.destroy()
 
 
+def cavity_joint_coupling(solid: CDEMSolid, unit: dolfinx.fem.Function) -> np.ndarray:
+    """Per local facet, its fluid volume's change (m^3/Pa) under the unit cavity pressure.
+
+    ``unit`` is the solid's response to a unit pressure in the cavity: the
+    facet's area times its opening at the midpoint (the point at which a facet
+    pressure loads the solid).  By reciprocity this is also ``dV / dp`` of the
+    cavity's volume under a pressure on that facet.  Zero on the facets a
+    fluid pressure does not load (broken and closed) and on ghost facets.
+    """
+    jump = solid.jumps(unit)
+    opening = -np.einsum("fi,fi->f", jump, solid.normals)
+    loaded = (solid.state == FacetState.INTACT) | (solid.contact == OPEN)
+    return np.where(loaded & solid.owned, solid.areas * opening, 0.0)
+
+
 class _PumpedCavity:
     """The cavity, its cracks and the joints' seepage, stepped together."""
 
@@ -211,7 +234,11 @@ class _PumpedCavity:
         solid.solve(loads, self.unit_loads())
         self.wall_ref = self._wall(0)
         self.slope = self._slope()
+        self.coupling = self._coupling()
         self.volume = self._volume(loads)  # at self.p
+        self.volume_joints = self.seep.pressure  # the joints' pressures of self.volume
+        self.rebalances = 0  # balances repeated on the measured volume
+        self.solves_before = solid.solves
         self.m0 = self.volume * (1.0 + self.p / self.kw) + self.joint_content()
         self.worst = 0.0
         self.secant_balances = 0  # balances the joint Newton could not do
@@ -350,11 +377,30 @@ class _PumpedCavity:
         cracks = float(np.sum(solid.areas[mask] * w[mask]))
         return self._wall(1) + float(solid.comm.allreduce(cracks, op=MPI.SUM))
 
+    def _coupling(self) -> np.ndarray:
+        """How the cavity's volume moves with each network facet's pressure (m^3/Pa).
+
+        By reciprocity (the stiffness is symmetric) ``dV / dp_j`` of a facet is
+        the change of its fluid volume, area times opening, under a unit cavity
+        pressure (the solution in ``u_unit``): the joint pressure's load is the
+        work-conjugate of that volume as the cavity pressure's is of ``V``.
+        Zero on the facets the joint pressure does not load (closed cracks).
+        """
+        g = cavity_joint_coupling(self.solid, self.solid.u_unit)
+        local = np.zeros(self.net.size)
+        owned = self.solid.owned[self.facets]
+        np.add.at(local, self.positions[owned], g[self.facets][owned])
+        out = np.zeros_like(local)
+        self.solid.comm.Allreduce(local, out, op=MPI.SUM)
+        return out
+
     def resolve(self, loads: Loads) -> None:
-        """Solve at ``loads`` after a state change: new volume and slope."""
+        """Solve at ``loads`` after a state change: new volume, slope and coupling."""
         self.solid.solve(loads, self.unit_loads())
         self.slope = self._slope()
+        self.coupling = self._coupling()
         self.volume = self._volume(loads)
+        self.volume_joints = self.seep.pressure
 
     # ------------------------------------------------------------- balance
 
@@ -369,7 +415,9 @@ class _PumpedCavity:
         last = self._last_balance
         guess = last[1] if last is not None and last[0] is saved else None
         self.seep.restore(saved)
-        storage = CavityStorage(self.volume, self.slope, self.p, self.kw)
+        storage = CavityStorage(
+            self.volume, self.slope, self.p, self.kw, self.coupling, self.volume_joints
+        )
         try:
             p = self.seep.step_pumped(dt, storage, target, guess)
             self._last_balance = (saved, self.seep.save())
@@ -383,12 +431,12 @@ class _PumpedCavity:
     def balance_by_secant(self, dt: float, target: float, saved: np.ndarray) -> float:
         """Do :meth:`balance` by a secant on the cavity pressure, a seepage step per trial."""
         v0, p0, slope, kw, seep = self.volume, self.p, self.slope, self.kw, self.seep
+        storage = CavityStorage(v0, slope, p0, kw, self.coupling, self.volume_joints)
 
         def residual(p: float) -> float:
             seep.restore(saved)
             seep.step(dt, p)
-            held = (v0 + slope * (p - p0)) * (1.0 + p / kw) + float(seep.content.sum())
-            return held - target
+            return storage.held(p, seep.pressure) + float(seep.content.sum()) - target
 
         tol = _VOLUME_TOLERANCE * self.pumping.rate * dt
         stiffness = max(slope + v0 / kw, 1e-300)
@@ -436,7 +484,7 @@ class _PumpedCavity:
         target = self.m0 + self.pumping.rate * (t + dt)
         start_net, start_q = self.net, self.seep.save()
         start_p, start_pj = self.p, self.seep.pressure
-        start_volume, start_slope = self.volume, self.slope
+        start_volume, start_slope, start_joints = self.volume, self.slope, self.volume_joints
         start_loads = self.loads(start_p, start_pj)
         u_start = solid.u.x.array.copy()
         saved, landings, broken, rounds, first, top = start_q, 0, 0, 0, None, -math.inf
@@ -444,15 +492,20 @@ class _PumpedCavity:
         while passes < max_iterations:
             passes += 1
             p = self.balance(dt, target, saved)
-            loads = self.loads(p, self.seep.pressure)
+            pj = self.seep.pressure
+            loads = self.loads(p, pj)
             predicted = self.volume + self.slope * (p - self.p)
+            predicted += float(self.coupling @ (pj - self.volume_joints))
             solid.solve(loads)
             check_small_displacement(solid, t + dt)
-            self.volume, self.p = self._volume(loads), p
+            self.volume, self.p, self.volume_joints = self._volume(loads), p, pj
             if abs(self.volume - predicted) * (1.0 + p / self.kw) > max(
                 _VOLUME_TOLERANCE * self.pumping.rate * dt, _VOLUME_ROUNDOFF * abs(self.volume)
             ):
-                continue  # the joints moved the walls: balance again on the measured volume
+                # the joints changed which of them hold pressure, or contacts moved:
+                # balance again on the measured volume
+                self.rebalances += 1
+                continue
             if broken == 0 and rounds == 0 and landings < _MAX_LANDINGS:
                 s = self._crossing(start_loads, loads, u_start)
                 # land just past the crossing (a landed step finds it at 1 / (1 + _PAST))
@@ -461,6 +514,7 @@ class _PumpedCavity:
                     target = self.m0 + self.pumping.rate * (t + dt)
                     self.seep.restore(saved)
                     self.p, self.volume, self.slope = start_p, start_volume, start_slope
+                    self.volume_joints = start_joints
                     solid.u.x.array[:] = u_start
                     continue
             top = max(top, p)
@@ -591,6 +645,8 @@ class _PumpedCavity:
             validity_limit=limit,
             secant_balances=self.secant_balances,
             debris_cells=self.debris_cells,
+            rebalances=self.rebalances,
+            solid_solves=solid.solves - self.solves_before,
         )
 
 

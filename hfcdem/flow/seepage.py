@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from petsc4py import PETSc
@@ -114,29 +114,52 @@ class CavityStorage:
 
     ``volume`` (m^3; per metre in 2D) at ``pressure`` (Pa), its walls'
     ``slope`` dV/dP (m^3/Pa) at fixed interface states, the fluid's
-    ``bulk_modulus`` Kw (Pa).
+    ``bulk_modulus`` Kw (Pa).  ``joint_coupling`` (m^3/Pa per network facet,
+    optional): how the volume moves with the joints' pressures, measured at
+    ``joint_pressure`` (Pa per network facet).  The volume then is
+    ``volume + slope (P - pressure) + joint_coupling . (p_joints - joint_pressure)``.
     """
 
     volume: float
     slope: float
     pressure: float
     bulk_modulus: float
+    joint_coupling: np.ndarray | None = field(default=None, compare=False)
+    joint_pressure: np.ndarray | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         for name, unit in (("volume", "m^3"), ("slope", "m^3/Pa"), ("pressure", "Pa")):
             _finite(name, getattr(self, name), unit)
         if not (math.isfinite(self.bulk_modulus) and self.bulk_modulus > 0.0):
             raise ValueError(f"bulk_modulus must be > 0 Pa, got {self.bulk_modulus!r}")
+        if (self.joint_coupling is None) != (self.joint_pressure is None):
+            raise ValueError("joint_coupling and joint_pressure come together (or neither)")
+        if self.joint_coupling is not None:
+            g, pj = np.asarray(self.joint_coupling), np.asarray(self.joint_pressure)
+            if g.ndim != 1 or g.shape != pj.shape:
+                raise ValueError(
+                    f"joint_coupling and joint_pressure must be two vectors of one length, "
+                    f"got {g.shape} and {pj.shape}"
+                )
+            if not (np.all(np.isfinite(g)) and np.all(np.isfinite(pj))):
+                raise ValueError("joint_coupling (m^3/Pa) and joint_pressure (Pa) must be finite")
 
-    def held(self, p: float) -> float:
-        """Fluid held at ``p`` (m^3 at zero pressure)."""
-        return (self.volume + self.slope * (p - self.pressure)) * (1.0 + p / self.bulk_modulus)
+    def held(self, p: float, joints: np.ndarray | None = None) -> float:
+        """Fluid held at ``p`` (m^3 at zero pressure), the joints at ``joints`` (Pa)."""
+        volume = self.volume + self.slope * (p - self.pressure)
+        if self.joint_coupling is not None and joints is not None:
+            volume += float(self.joint_coupling @ (joints - self.joint_pressure))
+        return volume * (1.0 + p / self.bulk_modulus)
 
-    def coefficients(self) -> tuple[float, float, float]:
-        """``(a2, a1, a0)`` with ``held(P) = a2 P^2 + a1 P + a0``."""
-        base = self.volume - self.slope * self.pressure
+    def coefficients(self, shift: float = 0.0, tilt: float = 0.0) -> tuple[float, float, float]:
+        """``(a2, a1, a0)`` with ``held(P) = a2 P^2 + a1 P + a0``.
+
+        ``shift + tilt P`` is added to the volume (the joints' part, linearised).
+        """
+        slope = self.slope + tilt
+        base = self.volume - self.slope * self.pressure + shift
         kw = self.bulk_modulus
-        return self.slope / kw, self.slope + base / kw, base
+        return slope / kw, slope + base / kw, base
 
 
 class CavityDry(RuntimeError):
@@ -404,6 +427,8 @@ class JointSeepage:
             c1 = float(self.storage @ x1)
             c0 = base + float(self.storage @ x0) - p * c1
             p_new = _balance_root(a2, a1 + c1, a0 + c0)
+            if cavity.joint_coupling is not None:
+                p_new = _coupled_root(cavity, x0, x1, p, p_new, (c1, c0))
             dry = p_new < 0.0
             p_new = max(p_new, 0.0)
             new = x0 + (p_new - p) * x1
@@ -412,7 +437,8 @@ class JointSeepage:
             res = float(np.abs(residual(self._pairs, new, old, rate, kw, pc) * scale).max())
             if res <= FILLING_TOLERANCE:
                 if dry:
-                    excess = cavity.held(0.0) + float(void @ (1.0 + new / kw)) - target
+                    joints = np.maximum(new, 0.0)
+                    excess = cavity.held(0.0, joints) + float(void @ (1.0 + new / kw)) - target
                     msg = f"the cavity runs dry (holds {excess:.3g} m^3 more than pumped at 0 Pa)"
                     raise CavityDry(msg)
                 outflow = float(lin.cavity_outflow(new).sum()) - (p_new - p) * float(
@@ -508,6 +534,40 @@ class JointSeepage:
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"{name} must be finite (Pa)")
         return np.broadcast_to(arr, (n,)).copy()
+
+
+def _coupled_root(
+    cavity: CavityStorage,
+    x0: np.ndarray,
+    x1: np.ndarray,
+    p: float,
+    guess: float,
+    joints: tuple[float, float],
+) -> float:
+    """:func:`_balance_root` with the cavity's volume following the joints' pressures.
+
+    The joints' pressures of the iterate, ``max(x0 + (P - p) x1, 0)``, are
+    linear in ``P`` on the facets that hold pressure at the root: that set is
+    found by a few fixed-point passes from ``guess`` (the root without the
+    coupling).  Returns ``guess`` when the coupled balance has no rising branch
+    (the measured-volume pass of the caller then does the coupling).
+    """
+    g = np.asarray(cavity.joint_coupling)
+    ref = float(g @ np.asarray(cavity.joint_pressure))
+    c1, c0 = joints
+    root, active = guess, None
+    for _ in range(4):
+        now = x0 + (max(root, 0.0) - p) * x1 > 0.0
+        if active is not None and np.array_equal(now, active):
+            break
+        active = now
+        tilt = float(g[active] @ x1[active])
+        shift = float(g[active] @ (x0[active] - p * x1[active])) - ref
+        a2, a1, a0 = cavity.coefficients(shift, tilt)
+        if not a1 + c1 > 0.0:
+            return guess
+        root = _balance_root(a2, a1 + c1, a0 + c0)
+    return root
 
 
 def _balance_root(a2: float, a1: float, a0: float) -> float:
