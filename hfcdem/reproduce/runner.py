@@ -117,6 +117,7 @@ def _run_all(
     if not cases:
         raise ValueError(f"no case of tier {tier!r} among {', '.join(only or [])}")
     out = prepare_output_dir(output, comm)
+    commit = run_tag(comm)["commit"]  # the code this process runs, not HEAD at the end
     clock = _Clock(left=[_estimate(c, c.tiers[tier], out, comm.size) for c in cases])
     records = []
     for i, case in enumerate(cases, start=1):
@@ -145,7 +146,8 @@ def _run_all(
             f"[{i}/{len(cases)}] {case.name}: {state}; {judged} rows judged, {met} met"
             + (f" ({record.message})" if record.message else "")
         )
-    meta = run_tag(comm) | {"tier": tier, "fidelity": fidelity, "resolution": resolution}
+    meta = run_tag(comm) | {"commit": commit, "tier": tier, "fidelity": fidelity}
+    meta["resolution"] = resolution
     if comm.rank == 0:
         from hfcdem.reproduce.report import write_report
 

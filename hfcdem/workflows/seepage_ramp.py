@@ -268,6 +268,8 @@ def _run_pumped(
         "pumping_rate_m3_per_s": pumping.rate,
         "max_mass_error": result.max_mass_error,
         "secant_balances": result.secant_balances,
+        "rebalances": result.rebalances,
+        "solid_solves": result.solid_solves,
         "debris_cells": result.debris_cells,
         "steps": result.steps,
         "stopped": result.stopped,
