@@ -444,3 +444,50 @@ def test_stiffness_is_symmetric_so_cholesky_applies():
     # and it solves as before
     solid.solve(Loads(crack_pressure=P))
     assert np.all(np.isfinite(solid.u.x.array))
+
+
+def test_a_load_form_is_compiled_once_per_interface_states_and_gives_a_fresh_forms_vector():
+    """The load form of some terms is reused, its values set per call.
+
+    The vector of the reused form equals that of a form built from scratch for
+    the same loads, whatever the loads before; a break (new interface states)
+    or new terms (a per-facet joint pressure) give another form.
+    """
+    import dolfinx.fem.petsc
+    import ufl
+    from petsc4py import PETSc
+    from tiny_solid import crack_facets, tiny_solid
+
+    solid = tiny_solid()
+    n = solid.num_facets
+    x = solid.midpoints[:, 0]
+
+    def vector(form):
+        b = dolfinx.fem.petsc.assemble_vector(form)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        out = b.array.copy()
+        b.destroy()
+        return out
+
+    def fresh(loads):
+        dS = ufl.Measure("dS", domain=solid.mesh, subdomain_data=solid.interface_tags())
+        return vector(dolfinx.fem.form(solid.forms.load(loads, solid.states, dS)))
+
+    def same(a, b):  # on every rank
+        local = bool(np.allclose(a, b, rtol=1e-14, atol=0.0))
+        return MPI.COMM_WORLD.allreduce(local, op=MPI.LAND)
+
+    first = Loads(cavity={"left": 3e6}, crack_pressure=np.full(n, 1e6))
+    second = Loads(cavity={"left": 5e6}, crack_pressure=1e5 * (1.0 + x), in_situ_factor=0.3)
+    form = solid.load_form(first)
+    assert solid.load_form(second) is form
+    assert same(vector(form), fresh(second))
+    assert not same(vector(solid.load_form(first)), fresh(second))
+    joints = Loads(cavity={"left": 5e6}, crack_pressure=np.zeros(n), joint_pressure=2e6 + x)
+    assert solid.load_form(joints) is not form
+    assert same(vector(solid.load_form(joints)), fresh(joints))
+    crack = crack_facets(solid)
+    solid.break_facets(crack, np.full(len(crack), FacetState.TENSILE), 0.0)
+    broken = solid.load_form(second)
+    assert broken is not form
+    assert same(vector(broken), fresh(second))

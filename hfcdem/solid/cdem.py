@@ -45,13 +45,16 @@ from hfcdem.solid.forms import (
     OPEN_FACETS,
     SLIP_FACETS,
     SPRING,
+    LoadForm,
     Loads,
+    LoadTerms,
     SolidForms,
     change_tags,
     combine,
     dg_boundary_conditions,
     interface_tags,
     interface_values,
+    load_terms,
     rigid_body_modes,
 )
 from hfcdem.solid.interfaces import (
@@ -177,6 +180,9 @@ class CDEMSolid:
         self._reduced_version = -1
         # the compiled stiffness form of the last interface states (a new one costs ~60 ms)
         self._stiffness_form: tuple[np.ndarray, int, dolfinx.fem.Form] | None = None
+        # load forms of the current interface states and band, by their terms
+        self._load_forms: dict[LoadTerms, LoadForm] = {}
+        self._load_forms_stamp: tuple[np.ndarray, int] | None = None
         self.operator = StiffnessOperator(
             self.comm,
             lambda: self.assemble_stiffness()[1],
@@ -436,8 +442,25 @@ class CDEMSolid:
         return int(self.V.dofmap.index_map.size_global * self.gdim)
 
     def load_form(self, loads: Loads) -> dolfinx.fem.Form:
-        """Compiled right-hand side of ``loads`` for the current interface states."""
-        return dolfinx.fem.form(self.forms.load(loads, self.states, self._measure()))
+        """Compiled right-hand side of ``loads`` at the current interface states (collective).
+
+        The form of each :class:`~hfcdem.solid.forms.LoadTerms` is compiled once
+        per interface states and band, and its values set for every call: it is
+        valid until the next call with loads of the same terms.
+        """
+        values = interface_values(self.states)
+        stamp = self._load_forms_stamp
+        stale = stamp is None or stamp[1] != self.band.version
+        stale = stale or not np.array_equal(stamp[0], values)  # type: ignore[index]
+        if self.comm.allreduce(stale, op=MPI.LOR):
+            self._load_forms.clear()
+            self._load_forms_stamp = (values.copy(), self.band.version)
+        terms = load_terms(loads, self.states, self.comm)
+        form = self._load_forms.get(terms)
+        if form is None:
+            form = self._load_forms[terms] = LoadForm(self.forms, terms, self._measure())
+        form.set(loads, self.states)
+        return form.form
 
     def solve(self, loads: Loads, unit: Loads | None = None) -> None:
         """Solve for ``loads`` (and, with the same matrix, for ``unit`` into ``u_unit``)."""

@@ -164,12 +164,23 @@ class FacetFunctions:
 
     def function(self, values: np.ndarray, shape: tuple[int, ...] = ()) -> dolfinx.fem.Function:
         """Return per-facet ``values`` as a Crouzeix-Raviart function (collective)."""
+        f = dolfinx.fem.Function(self._space(shape)[0])
+        self.assign(f, values, shape)
+        return f
+
+    def assign(
+        self, f: dolfinx.fem.Function, values: np.ndarray, shape: tuple[int, ...] = ()
+    ) -> None:
+        """Set per-facet ``values`` into ``f``, a function of :meth:`function` (collective)."""
         V, dofs = self._space(shape)
-        f = dolfinx.fem.Function(V)
         bs = V.dofmap.index_map_bs
         f.x.array.reshape(-1, bs)[dofs] = np.asarray(values).reshape(len(dofs), bs)
         f.x.scatter_forward()
-        return f
+
+    @property
+    def size(self) -> int:
+        """Number of this rank's interface facets (the length of per-facet values)."""
+        return len(self.facets.facets)
 
     def _space(self, shape: tuple[int, ...]) -> tuple[dolfinx.fem.FunctionSpace, np.ndarray]:
         if shape not in self._cache:

@@ -189,52 +189,113 @@ class SolidForms:
 
     def load(self, loads: Loads, states: InterfaceStates, dS: ufl.Measure) -> ufl.Form:
         """Linear form of ``loads`` at ``states`` (collective: facet functions)."""
-        mesh, gdim = self.mesh, self.mesh.geometry.dim
-        comm = mesh.comm
+        form = LoadForm(self, load_terms(loads, states, self.mesh.comm), dS)
+        form.set(loads, states)
+        return form.ufl_form
+
+
+@dataclass(frozen=True)
+class LoadTerms:
+    """Which terms a load form has: its shape, not its values (a new shape recompiles).
+
+    ``cavity``: the loaded exterior groups; ``facet_crack``: the crack
+    pressure is per facet (else one value); ``joints``: a pressure inside
+    intact interfaces; ``slip``: friction and in-situ shear on sliding faces.
+    """
+
+    cavity: tuple[str, ...]
+    facet_crack: bool
+    joints: bool
+    slip: bool
+
+
+def load_terms(loads: Loads, states: InterfaceStates, comm: MPI.Comm) -> LoadTerms:
+    """Return the terms of ``loads`` at ``states``, the same on every rank (collective)."""
+    has_joints = loads.joint_pressure is not None and bool(np.any(loads.joint_pressure))
+    flags = np.array([has_joints, bool(np.any(states.contact == SLIP))], dtype=np.int32)
+    comm.Allreduce(MPI.IN_PLACE, flags, op=MPI.MAX)
+    return LoadTerms(
+        cavity=tuple(loads.cavity),
+        facet_crack=not np.isscalar(loads.crack_pressure),
+        joints=bool(flags[0]),
+        slip=bool(flags[1]) and loads.in_situ_factor != 0.0,
+    )
+
+
+class LoadForm:
+    """The load form of some :class:`LoadTerms`, its values set per solve.
+
+    Every value is a ``Constant`` or a per-facet function set by :meth:`set`,
+    so a solid solving many loads at the same interface states compiles the
+    form once (the UFL signature and the JIT cache lookup cost 10-20 ms a
+    form, more than a back-substitution of a small solid).
+    """
+
+    def __init__(self, forms: SolidForms, terms: LoadTerms, dS: ufl.Measure) -> None:
+        mesh, gdim = forms.mesh, forms.mesh.geometry.dim
         scalar = dolfinx.default_scalar_type
-        v, n = ufl.TestFunction(self.V), ufl.FacetNormal(mesh)
-        facet_function = self.facet_functions.function
+        self.terms = terms
+        self._forms, self._gdim = forms, gdim
+        self._compiled: dolfinx.fem.Form | None = None
 
-        def const(value: float | np.ndarray) -> dolfinx.fem.Constant:
-            return dolfinx.fem.Constant(mesh, np.asarray(value, dtype=scalar))
+        def const(shape: tuple[int, ...] = ()) -> dolfinx.fem.Constant:
+            return dolfinx.fem.Constant(mesh, np.zeros(shape, dtype=scalar))
 
-        sigma0 = const(loads.in_situ_factor * self.sigma0)
-        eye = ufl.Identity(gdim)
-        L = ufl.inner(const(np.zeros(gdim)), v) * ufl.dx
+        facet_function = forms.facet_functions.function
+        zeros = np.zeros(forms.facet_functions.size)
+        v, n = ufl.TestFunction(forms.V), ufl.FacetNormal(mesh)
+        npl, eye = n("+"), ufl.Identity(gdim)
+        self._sigma0 = sigma0 = const((gdim, gdim))
+        self._cavity = {name: const() for name in terms.cavity}
+        L = ufl.inner(const((gdim,)), v) * ufl.dx
+        for name, p in self._cavity.items():
+            L += -ufl.inner((p * eye + sigma0) * n, v) * forms.tmesh.ds(name)
+        one = {"quadrature_degree": 1}  # per-facet values: exact at the midpoint
+        jv = ufl.jump(v)
+        self._crack = facet_function(zeros) if terms.facet_crack else const()
+        if terms.facet_crack:
+            pc = self._crack("+")
+            L += -ufl.inner((pc * eye + sigma0) * npl, jv) * dS(OPEN_FACETS, metadata=one)
+        else:
+            L += -ufl.inner((self._crack * eye + sigma0) * npl, jv) * dS(OPEN_FACETS)
+        self._joints = facet_function(zeros) if terms.joints else None
+        if self._joints is not None:
+            L += -ufl.inner(self._joints("+") * npl, jv) * dS(SPRING, metadata=one)
+        self._friction = None
+        if terms.slip:
+            # friction minus in-situ shear on sliding faces, per facet (+ side); a unit
+            # load (no in-situ part) is the linearisation about the current slip set
+            self._friction = facet_function(np.zeros((len(zeros), gdim)), (gdim,))
+            tau0 = sigma0 * npl - ufl.inner(sigma0 * npl, npl) * npl
+            L += ufl.inner(self._friction("+") - tau0, jv) * dS(SLIP_FACETS, metadata=one)
+        self.ufl_form = L
+
+    @property
+    def form(self) -> dolfinx.fem.Form:
+        """The compiled form (collective the first time)."""
+        if self._compiled is None:
+            self._compiled = dolfinx.fem.form(self.ufl_form)
+        return self._compiled
+
+    def set(self, loads: Loads, states: InterfaceStates) -> None:
+        """Set the values of ``loads`` (with the terms of this form) at ``states`` (collective)."""
+        if tuple(loads.cavity) != self.terms.cavity:
+            raise ValueError(f"loads on {tuple(loads.cavity)}, the form on {self.terms.cavity}")
+        assign = self._forms.facet_functions.assign
+        self._sigma0.value[:] = loads.in_situ_factor * self._forms.sigma0
         for name, p in loads.cavity.items():
             if not math.isfinite(p):
                 raise ValueError(f"cavity pressure on {name!r} must be finite, got {p!r}")
-            L += -ufl.inner((const(p) * eye + sigma0) * n, v) * self.tmesh.ds(name)
-        npl = n("+")
-        if np.isscalar(loads.crack_pressure):
-            p_crack = const(float(loads.crack_pressure))  # type: ignore[arg-type]
-            L += -ufl.inner((p_crack * eye + sigma0) * npl, ufl.jump(v)) * dS(OPEN_FACETS)
+            self._cavity[name].value = p
+        if isinstance(self._crack, dolfinx.fem.Constant):
+            self._crack.value = float(loads.crack_pressure)
         else:
-            pf = facet_function(np.asarray(loads.crack_pressure))
-            L += -ufl.inner((pf("+") * eye + sigma0) * npl, ufl.jump(v)) * dS(
-                OPEN_FACETS, metadata={"quadrature_degree": 1}
-            )
-        has_joints = loads.joint_pressure is not None and bool(np.any(loads.joint_pressure))
-        if comm.allreduce(has_joints, op=MPI.LOR):  # collective, as below
-            jf = facet_function(
-                np.zeros(len(states.state))
-                if loads.joint_pressure is None
-                else np.asarray(loads.joint_pressure)
-            )
-            L += -ufl.inner(jf("+") * npl, ufl.jump(v)) * dS(
-                SPRING, metadata={"quadrature_degree": 1}
-            )
-        # collective decision: building the facet function is collective
-        any_slip = comm.allreduce(bool(np.any(states.contact == SLIP)), op=MPI.LOR)
-        if any_slip and loads.in_situ_factor != 0.0:
-            # friction minus in-situ shear on sliding faces, per facet (+ side); a unit
-            # load (no in-situ part) is the linearisation about the current slip set
-            tf = facet_function(states.friction_traction, (gdim,))
-            tau0 = sigma0 * npl - ufl.inner(sigma0 * npl, npl) * npl
-            L += ufl.inner(tf("+") - tau0, ufl.jump(v)) * dS(
-                SLIP_FACETS, metadata={"quadrature_degree": 1}
-            )
-        return L
+            assign(self._crack, np.broadcast_to(loads.crack_pressure, (len(states.state),)))
+        if self._joints is not None:
+            joint = loads.joint_pressure
+            assign(self._joints, np.zeros(len(states.state)) if joint is None else joint)
+        if self._friction is not None:
+            assign(self._friction, states.friction_traction, (self._gdim,))
 
 
 def dg_boundary_conditions(
@@ -306,6 +367,8 @@ __all__ = [
     "OPEN_FACETS",
     "SLIP_FACETS",
     "SPRING",
+    "LoadForm",
+    "LoadTerms",
     "Loads",
     "SolidForms",
     "change_code",
@@ -314,5 +377,6 @@ __all__ = [
     "dg_boundary_conditions",
     "interface_tags",
     "interface_values",
+    "load_terms",
     "rigid_body_modes",
 ]
