@@ -46,13 +46,15 @@ class FieldSeries:
         self._writer = dolfinx.io.VTXWriter(
             self.comm, self.fields_path, [self.u] + [f for f, _ in self.stresses], engine="BP4"
         )
-        self.frames: list[tuple[float, str]] = []
-        if self.comm.rank == 0:
-            (out / "interfaces").mkdir(exist_ok=True)
+        kept: list[tuple[float, str]] = []
         if resume_from is not None and self.comm.rank == 0:
-            self.frames = [f for f in read_pvd(out / "interfaces.pvd") if f[0] <= resume_from]
-        self.frames = self.comm.bcast(self.frames, root=0)
-        self.comm.barrier()
+            kept = [f for f in read_pvd(out / "interfaces.pvd") if f[0] <= resume_from]
+        self._frames = PvdFrames(out, "interfaces", self.comm, self.comm.bcast(kept, root=0))
+
+    @property
+    def frames(self) -> list[tuple[float, str]]:
+        """``(time, file)`` of the interface frames written (and kept from before a resume)."""
+        return self._frames.frames
 
     def write(self, t: float) -> None:
         """Write the last accepted state at simulated time ``t`` (collective)."""
@@ -61,17 +63,41 @@ class FieldSeries:
         for f, expr in self.stresses:
             f.interpolate(expr)
         self._writer.write(t)
-        points, data = self.frac.interface_fields(loads)
-        name = f"interfaces/frame_{len(self.frames):04d}.vtu"
-        write_interfaces(self.out / name, points, data, self.comm)
-        self.frames.append((t, name))
-        if self.comm.rank == 0:
-            write_atomic(self.out / "interfaces.pvd", pvd_text(self.frames))
-        self.comm.barrier()
+        self._frames.add(t, *self.frac.interface_fields(loads))
 
     def close(self) -> None:
         """Close the VTX writer (collective)."""
         self._writer.close()
+
+
+class PvdFrames:
+    """Interface frames ``DIR/STEM/frame_K.vtu`` listed in ``DIR/STEM.pvd`` (collective).
+
+    Each frame is written atomically and the PVD rewritten after it, so a
+    stopped run keeps its frames.  ``frames``: those of an earlier run to keep
+    (a resumed run); without them an earlier run's frame files are removed.
+    """
+
+    def __init__(
+        self, out: Path, stem: str, comm: Any, frames: list[tuple[float, str]] | None = None
+    ) -> None:
+        self.out, self.stem, self.comm = out, stem, comm
+        self.frames: list[tuple[float, str]] = list(frames or [])
+        if comm.rank == 0:
+            (out / stem).mkdir(exist_ok=True)
+            if frames is None:
+                for stale in (out / stem).glob("frame_*.vtu"):  # an earlier run's (--force)
+                    stale.unlink()
+        comm.barrier()
+
+    def add(self, t: float, points: np.ndarray, data: dict[str, np.ndarray]) -> None:
+        """Write ``data`` on the interfaces ``points`` as the frame at ``t``."""
+        name = f"{self.stem}/frame_{len(self.frames):04d}.vtu"
+        write_interfaces(self.out / name, points, data, self.comm)
+        self.frames.append((t, name))
+        if self.comm.rank == 0:
+            write_atomic(self.out / f"{self.stem}.pvd", pvd_text(self.frames))
+        self.comm.barrier()
 
 
 class InterfaceFrames:
@@ -86,26 +112,20 @@ class InterfaceFrames:
     def __init__(self, out: Path, stem: str, t_end: float, interval: float, comm: Any) -> None:
         if not (interval > 0.0):
             raise ValueError(f"output interval must be a positive time (s), got {interval!r}")
-        self.out, self.stem, self.comm = out, stem, comm
-        self.frames: list[tuple[float, str]] = []
+        self._frames = PvdFrames(out, stem, comm)
         self._times = iter(output_times(0.0, t_end, interval))
         self.due = 0.0
-        if comm.rank == 0:
-            (out / stem).mkdir(exist_ok=True)
-            for stale in (out / stem).glob("frame_*.vtu"):  # an earlier run's (--force)
-                stale.unlink()
-        comm.barrier()
+
+    @property
+    def frames(self) -> list[tuple[float, str]]:
+        """``(time, file)`` of the frames written."""
+        return self._frames.frames
 
     def offer(self, t: float, points: np.ndarray, data: dict[str, np.ndarray]) -> bool:
         """Write ``data`` on the interfaces ``points`` at ``t`` if an output time is due."""
         if t < self.due * (1.0 - 1e-12):
             return False
-        name = f"{self.stem}/frame_{len(self.frames):04d}.vtu"
-        write_interfaces(self.out / name, points, data, self.comm)
-        self.frames.append((t, name))
-        if self.comm.rank == 0:
-            write_atomic(self.out / f"{self.stem}.pvd", pvd_text(self.frames))
-        self.comm.barrier()
+        self._frames.add(t, points, data)
         while self.due <= t * (1.0 + 1e-12):
             self.due = next(self._times, math.inf)
         return True
@@ -146,5 +166,6 @@ def output_times(t_start: float, t_end: float, interval: float) -> np.ndarray:
 __all__ = [
     "FieldSeries",
     "InterfaceFrames",
+    "PvdFrames",
     "output_times",
 ]
