@@ -13,7 +13,9 @@ pressure, first tensile break, failures, steps, solid solves (seepage), wall tim
   otherwise as shipped;
 - ``seepage``: the joints of the fracturable zone fill in time from dry
   (``wall_joints = "seepage"``, 1 um hydraulic aperture), water, no film: no
-  knob of the joints' fluid left.
+  knob of the joints' fluid left;
+- ``seepage-kw``: the same with the paper's fluid stiffness Kw = 10 MPa
+  (Tables 1 and 3) in the cavity and the joints instead of water's.
 
     make run CMD="python3 benchmarks/fidelity_ladder.py --rungs uniform uniform-water viscous"
     make run CMD="python3 benchmarks/fidelity_ladder.py --rungs seepage"   # about 20 min coarse
@@ -33,7 +35,7 @@ from hfcdem.config.scene import load_scene
 from hfcdem.workflows.run import run_scene
 
 ROOT = Path(__file__).resolve().parents[1]
-RUNGS = ("uniform", "uniform-water", "viscous", "seepage")
+RUNGS = ("uniform", "uniform-water", "viscous", "seepage", "seepage-kw")
 
 
 def scene_text(rung: str) -> str:
@@ -42,7 +44,9 @@ def scene_text(rung: str) -> str:
     if rung in ("uniform-water", "seepage"):
         text = re.sub(r"(?m)^wall_film = .*\n", "", text)
         text = re.sub(r'(?m)^bulk_modulus = "[^"]*"', 'bulk_modulus = "2.2 GPa"', text)
-    if rung == "seepage":
+    if rung == "seepage-kw":
+        text = re.sub(r"(?m)^wall_film = .*\n", "", text)
+    if rung in ("seepage", "seepage-kw"):
         text = re.sub(r'(?m)^wall_joints = "[a-z]+"', 'wall_joints = "seepage"', text)
     if rung == "viscous":
         text = re.sub(r'(?m)^fidelity = "[a-z]+"', 'fidelity = "viscous"', text)
