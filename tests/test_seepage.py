@@ -561,7 +561,7 @@ def test_pumped_step_balances_a_cavity_that_follows_the_joints():
         p, pj = p_new, sp.pressure
     assert max(gaps) < 1e-9  # measured 2.5e-10
     assert balance / total < 1e-15  # measured 2.4e-16
-    assert missed / total > 1e-5  # 1e3x the re-balance tolerance: measured 8.3e-5
+    assert missed / total > 1e-5  # far above the re-balance tolerance: measured 8.3e-5
     assert 0.25 < float(sp.saturation.mean()) < 0.35  # measured 0.30
     with pytest.raises(ValueError, match=r"come together"):
         CavityStorage(volume, slope, p, kw, g, None)
