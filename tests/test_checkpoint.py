@@ -63,6 +63,24 @@ def test_interfaces_round_trip_through_a_fresh_solid():
     assert fresh.state[crack].tolist() == [1, 1]
     assert int(np.sum(fresh.state != 0)) == 2
     assert interface_rows(fresh) == rows
+    assert not fresh.released.any()
+
+
+def test_debris_faces_stay_released_through_a_checkpoint():
+    broken = tiny_solid()
+    break_crack(broken)
+    broken.release_facets(crack_facets(broken))
+    data = json.loads(json.dumps(checkpoint_data({"t": 2.0}, broken, _fluid())))
+    assert all(row[4] is True for row in data["interfaces"])
+    fresh = tiny_solid(MPI.COMM_SELF)
+    read_checkpoint(data, fresh)
+    assert fresh.released[crack_facets(fresh)].tolist() == [True, True]
+    assert int(np.count_nonzero(fresh.released)) == 2
+    # a checkpoint from before the release flag (four items per row) reads as not released
+    data["interfaces"] = [row[:4] for row in data["interfaces"]]
+    older = tiny_solid(MPI.COMM_SELF)
+    read_checkpoint(data, older)
+    assert int(np.sum(older.state != 0)) == 2 and not older.released.any()
 
 
 def test_the_reduced_band_round_trips_through_a_fresh_solid():

@@ -10,6 +10,7 @@ from functools import cache
 import numpy as np
 import pytest
 from mpi4py import MPI
+from tiny_solid import break_crack, crack_facets, tiny_solid
 
 from hfcdem.analytic import kgd_viscosity
 from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
@@ -20,6 +21,7 @@ from hfcdem.flow.balance import GroupBalance
 from hfcdem.flow.fluid import CarterLeakOff
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solid.fragments import Fragments
 from hfcdem.solvers import ValidityLimit
 from hfcdem.workflows.breakdown import detect_breakdown
 
@@ -322,6 +324,49 @@ def test_a_cavity_emptied_by_loose_wall_blocks_stops_the_run(monkeypatch):
     with pytest.raises(ValidityLimit, match=r"cavity walls moved inward.*history up to t ="):
         hf.step()
     assert hf.history == kept and hf.t == kept[-1].time
+
+
+def _plate_cut_off_the_wall() -> HydraulicFracture:
+    """The tiny plate's crack at x = 1 cuts its half at the wall 'left' loose.
+
+    The cavity starts at 2 MPa against 1 MPa of in-situ stress across the crack,
+    so the crack is held open by the fluid, not shut by the rock.
+    """
+    solid = tiny_solid(stress=1e6)
+    break_crack(solid)
+    settings = FlowSettings(
+        cavity=("left",),
+        fidelity="uniform",
+        cavity_volume=1e-2,
+        initial_pressure=2e6,
+        dt_initial=0.5,
+        dt_max=0.5,
+    )
+    return HydraulicFracture(
+        solid, Fluid(bulk_modulus=1e9), Injection.constant_rate(1e-5), settings
+    )
+
+
+def test_a_block_cut_loose_from_the_wall_is_debris_in_the_cavity_fluid(monkeypatch):
+    """Its faces take the cavity pressure and the run goes on; held by nothing, it flies."""
+    hf = _plate_cut_off_the_wall()
+    crack = crack_facets(hf.solid)
+    assert hf.debris_cells == 8
+    assert np.all(hf.solid.released[crack])
+    for _ in range(4):
+        record = hf.step()
+    assert record.time == pytest.approx(2.0)
+    assert record.mass_error < 1e-12  # measured 4e-16
+    crack_pressure = np.asarray(hf.current_loads().crack_pressure)[crack]
+    assert np.allclose(crack_pressure, hf.p_cavity, rtol=1e-12)
+    # the released faces join the cavity's fluid: its open volume is stored
+    assert record.fracture_volume > 0.0
+
+    # the same plate with the release switched off: the half slides out of the rock
+    monkeypatch.setattr(Fragments, "debris", lambda self: (np.zeros(0, dtype=np.int64), 0))
+    loose = _plate_cut_off_the_wall()
+    with pytest.raises(ValidityLimit, match="slides or lifts out"):  # 1e4 sizes measured
+        loose.step()
 
 
 def test_pressure_schedule_follows_the_pump_and_balances():

@@ -1,8 +1,8 @@
 """The coupled run's state as JSON: the content of ``checkpoint.json``.
 
-Interfaces (failure state, contact, friction traction) and the fluid record
-(:class:`~hfcdem.coupling.fluidstate.FluidState`) are keyed by global vertex
-ids, so a run may resume on another number of ranks; the scalars are the
+Interfaces (failure state, contact, friction traction, released as the faces
+of debris) and the fluid record (:class:`~hfcdem.coupling.fluidstate.FluidState`)
+are keyed by global vertex ids, so a run may resume on another number of ranks; the scalars are the
 problem's own (time, step size, volumes, counters).
 """
 
@@ -36,7 +36,7 @@ SCALARS = (
 
 
 def interface_rows(solid: CDEMSolid) -> list[list[Any]]:
-    """Key, state, contact and friction traction of every broken facet (collective, sorted)."""
+    """Key, state, contact, friction traction and release of every broken facet (collective)."""
     sel = np.flatnonzero((solid.state != FacetState.INTACT) & solid.owned)
     rows = [
         [
@@ -44,6 +44,7 @@ def interface_rows(solid: CDEMSolid) -> list[list[Any]]:
             int(solid.state[i]),
             int(solid.contact[i]),
             [float(x) for x in solid.friction_traction[i]],
+            bool(solid.released[i]),
         ]
         for i in sel
     ]
@@ -54,12 +55,13 @@ def restore_interfaces(solid: CDEMSolid, rows: list[list[Any]]) -> None:
     """Set the states of this rank's facets among ``rows`` (of :func:`interface_rows`)."""
     ids = np.sort(np.asarray(solid.vertex_ids, dtype=np.int64), axis=1)
     local: dict[Key, int] = {tuple(int(v) for v in ids[i]): i for i in range(len(ids))}
-    for key, state, contact, friction in rows:
+    for key, state, contact, friction, *released in rows:  # older checkpoints: 4 items
         i = local.get(tuple(key))
         if i is not None:
             solid.state[i] = state
             solid.contact[i] = contact
             solid.friction_traction[i] = friction
+            solid.released[i] = bool(released and released[0])
 
 
 def band_rows(solid: CDEMSolid) -> list[list[int]]:

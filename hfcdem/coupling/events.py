@@ -13,6 +13,7 @@ from mpi4py import MPI
 
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
+from hfcdem.solid.fragments import Fragments
 from hfcdem.solid.interfaces import FacetState, select_breaking
 from hfcdem.solid.states import OPEN
 from hfcdem.solvers import ValidityLimit
@@ -59,6 +60,21 @@ def facets_to_break(solid: CDEMSolid, ratio: np.ndarray, cap: int | None) -> np.
     return select_breaking(ratio, solid.midpoints, rule, count, solid.comm)
 
 
+def release_debris(solid: CDEMSolid, fragments: Fragments) -> tuple[int, int]:
+    """Hold open the faces of blocks newly cut loose from the cavity walls (collective).
+
+    Such a block has no static equilibrium on its broken faces (a wedge at the
+    wall slides out along them); the cavity's fluid surrounds it instead, and
+    its faces, and the rock behind them, take the cavity pressure.  Returns the
+    global count of faces released now and the debris' cells in all.
+    """
+    facets, cells = fragments.debris()
+    count = int(solid.comm.allreduce(int(np.count_nonzero(solid.owned[facets])), MPI.SUM))
+    if count:
+        solid.release_facets(facets)
+    return count, cells
+
+
 def check_small_displacement(solid: CDEMSolid, t: float) -> None:
     """Raise :class:`ValidityLimit` where a broken interface opened or slid past its size.
 
@@ -88,4 +104,10 @@ def check_small_displacement(solid: CDEMSolid, t: float) -> None:
         )
 
 
-__all__ = ["LOOSE_JUMP", "check_small_displacement", "facets_to_break", "switch_contacts"]
+__all__ = [
+    "LOOSE_JUMP",
+    "check_small_displacement",
+    "facets_to_break",
+    "release_debris",
+    "switch_contacts",
+]

@@ -59,7 +59,10 @@ def local_network(solid: CDEMSolid, cavity_vertices: np.ndarray) -> LocalNetwork
     view = NetworkView(local, positions, owned_sel, net.size)
     contact_open = (solid.contact[local] == OPEN).astype(float)
     is_open = view.gather(contact_open[owned_sel], comm) > 0.5
-    return LocalNetwork(net, view, facet_keys(net.keys), is_open, net.components() == 0)
+    # the faces of debris are joined: the cavity's fluid surrounds the block
+    released = view.gather(solid.released[local][owned_sel].astype(float), comm) > 0.5
+    joined = (net.components() == 0) | released
+    return LocalNetwork(net, view, facet_keys(net.keys), is_open, joined)
 
 
 def pressure_groups(wet: np.ndarray, uniform: bool) -> np.ndarray:

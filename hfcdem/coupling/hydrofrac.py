@@ -15,7 +15,7 @@ until nothing changes; :mod:`~hfcdem.coupling.stepping` sizes the steps.  The
 fluid per facet lives in :class:`~hfcdem.coupling.fluidstate.FluidState`; every
 step records mass balance: injected = fluid in cavity + fractures + leaked.
 
-Size: about 650 lines, over the package's 600.  What is left is the step loop
+Size: about 730 lines, over the package's 600.  What is left is the step loop
 and the network-order fluid bookkeeping (fill, guess, solve, leak, accept); the
 seepage issue replaces that bookkeeping with a sparse flow system on every
 joint, so it is not split further before then.
@@ -43,7 +43,12 @@ from hfcdem.coupling.condense import (
     mean_point,
     mesh_cavity_volume,
 )
-from hfcdem.coupling.events import check_small_displacement, facets_to_break, switch_contacts
+from hfcdem.coupling.events import (
+    check_small_displacement,
+    facets_to_break,
+    release_debris,
+    switch_contacts,
+)
 from hfcdem.coupling.fluidstate import FluidState
 from hfcdem.coupling.groups import (
     condense_network,
@@ -62,6 +67,7 @@ from hfcdem.flow.newton import solve_groups
 from hfcdem.io.files import write_csv
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
+from hfcdem.solid.fragments import Fragments
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import InterfaceStates
 from hfcdem.solvers import ValidityLimit
@@ -139,6 +145,10 @@ class HydraulicFracture:
         # free from the start (recovered cell tractions underrate the wall's spring peaks)
         at_walls = np.isin(solid.vertex_ids, self._cavity_vertices).any(axis=1)
         solid.free_interfaces(np.asarray(at_walls, dtype=bool), rings=1)
+        # blocks cut loose from the walls become debris in the cavity's fluid
+        self.fragments = Fragments(solid, s.cavity) if s.cavity else None
+        self.debris_cells = 0
+        self._release_debris(0.0)
         self.rebuild()
         self._initialise_fluid()
 
@@ -426,6 +436,10 @@ class HydraulicFracture:
             if self._break(ratio, mode, t1):
                 changed_states = True
                 continue
+            if self._release_debris(t1):
+                changed_states = True
+                self._recondense("debris")
+                continue
             break
         else:
             raise SimulationStopped(
@@ -470,6 +484,26 @@ class HydraulicFracture:
             self._last_change = f"{switched} contacts switched"
             self._recondense("contact")
         return switched
+
+    def _release_debris(self, t1: float) -> bool:
+        """Hold open the faces of blocks cut loose from the walls; return whether any were.
+
+        Without it such a block slides out of the wall on its broken faces and
+        ends the run at the validity limit (:func:`check_small_displacement`).
+        """
+        if self.fragments is None:
+            return False
+        count, cells = release_debris(self.solid, self.fragments)
+        if not count:
+            return False
+        self._last_change = f"{count} faces around debris released"
+        if self.progress is not None:
+            self.progress(
+                f"  t {t1:.4g} s: blocks cut loose from the wall are debris ({cells} cells "
+                f"in all): {count} broken faces around them take the cavity pressure"
+            )
+        self.debris_cells = cells
+        return True
 
     def _break(self, ratio: np.ndarray, mode: np.ndarray, t1: float) -> bool:
         """Break the facets the rule picks from ``ratio``; return whether any broke."""

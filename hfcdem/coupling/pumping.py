@@ -53,7 +53,12 @@ from mpi4py import MPI
 
 from hfcdem.config.materials import Fluid
 from hfcdem.coupling.condense import cavity_vertices, mesh_cavity_volume
-from hfcdem.coupling.events import check_small_displacement, facets_to_break, switch_contacts
+from hfcdem.coupling.events import (
+    check_small_displacement,
+    facets_to_break,
+    release_debris,
+    switch_contacts,
+)
 from hfcdem.coupling.groups import local_network
 from hfcdem.coupling.penetration import CavityPumping, illinois_root, settle_excavation
 from hfcdem.flow.network import Network, gather_rows
@@ -255,20 +260,15 @@ class _PumpedCavity:
         local = local_network(self.solid, self.walls)
         out = np.zeros(self.solid.num_facets, dtype=bool)
         out[local.view.facets] = local.joined[local.view.positions]
-        return out | self.solid.released
+        return out
 
     def release_debris(self, t: float) -> int:
         """Hold open the faces of blocks newly cut loose from the walls; their count.
 
-        Such a block has no static equilibrium on its broken faces (a wedge at
-        the wall slides out along them); the cavity's fluid surrounds it instead
-        and its faces, and the rock behind them, take the cavity pressure.
+        See :func:`~hfcdem.coupling.events.release_debris`.
         """
-        solid = self.solid
-        facets, cells = self.fragments.debris()
-        count = int(solid.comm.allreduce(int(np.count_nonzero(solid.owned[facets])), MPI.SUM))
+        count, cells = release_debris(self.solid, self.fragments)
         if count:
-            solid.release_facets(facets)
             self.debris_news.append(
                 f"  t {t:.4g} s: {cells - self.debris_cells} cell(s) cut loose from the wall "
                 f"are debris: {count} broken faces around them take the cavity pressure"

@@ -343,6 +343,7 @@ def _summarise(
         "rebuilds": frac.rebuilds,
         "rebuild_seconds": frac.rebuild_seconds,
         "rebuild_causes": dict(frac.rebuild_causes),  # contact, break, band, fill, ...
+        "debris_cells": frac.debris_cells,  # cells cut loose from the walls, in the fluid
         "solid": solid.mode,
         "free_interfaces": solid.band.count(),
         "solved_unknowns": solid.num_dofs,  # at the end (reduced: grows with the band)
