@@ -191,17 +191,21 @@ def pump_with_seepage(
         run.seep.destroy()
 
 
-def cavity_joint_coupling(solid: CDEMSolid, unit: dolfinx.fem.Function) -> np.ndarray:
+def facet_openings(solid: CDEMSolid, u: dolfinx.fem.Function) -> np.ndarray:
+    """Per local facet, the opening of its faces at the midpoint (m) in the displacement ``u``."""
+    return -np.einsum("fi,fi->f", solid.jumps(u), solid.normals)
+
+
+def cavity_joint_coupling(solid: CDEMSolid, opening: np.ndarray) -> np.ndarray:
     """Per local facet, its fluid volume's change (m^3/Pa) under the unit cavity pressure.
 
-    ``unit`` is the solid's response to a unit pressure in the cavity: the
-    facet's area times its opening at the midpoint (the point at which a facet
-    pressure loads the solid).  By reciprocity this is also ``dV / dp`` of the
-    cavity's volume under a pressure on that facet.  Zero on the facets a
-    fluid pressure does not load (broken and closed) and on ghost facets.
+    ``opening``: the :func:`facet_openings` of the solid's response to a unit
+    pressure in the cavity (at the midpoint, the point at which a facet
+    pressure loads the solid); the volume is the facet's area times it.  By
+    reciprocity this is also ``dV / dp`` of the cavity's volume under a
+    pressure on that facet.  Zero on the facets a fluid pressure does not load
+    (broken and closed) and on ghost facets.
     """
-    jump = solid.jumps(unit)
-    opening = -np.einsum("fi,fi->f", jump, solid.normals)
     loaded = (solid.state == FacetState.INTACT) | (solid.contact == OPEN)
     return np.where(loaded & solid.owned, solid.areas * opening, 0.0)
 
@@ -238,8 +242,9 @@ class _PumpedCavity:
         loads = self.loads(self.p, self.seep.pressure)
         solid.solve(loads, self.unit_loads())
         self.wall_ref = self._wall(0)
-        self.slope = self._slope()
-        self.coupling = self._coupling()
+        opening = facet_openings(solid, solid.u_unit)  # one evaluation for both
+        self.slope = self._slope(opening)
+        self.coupling = self._coupling(opening)
         self.volume = self._volume(loads)  # at self.p
         self.volume_joints = self.seep.pressure  # the joints' pressures of self.volume
         self.rebalances = 0  # balances repeated on the measured volume
@@ -368,25 +373,28 @@ class _PumpedCavity:
         self.crack_volume = float(solid.comm.allreduce(cracks, op=MPI.SUM))
         return self.v_mesh + self._wall(0) - self.wall_ref + self.crack_volume
 
-    def _slope(self) -> float:
-        """``dV/dP`` of the cavity from the unit solution in ``u_unit`` (collective)."""
+    def _slope(self, opening: np.ndarray) -> float:
+        """``dV/dP`` of the cavity from the unit solution in ``u_unit`` (collective).
+
+        ``opening``: the unit solution's :func:`facet_openings`.
+        """
         solid = self.solid
         mask = self._crack_mask()
-        jump = solid.jumps(solid.u_unit)
-        w = -np.einsum("fi,fi->f", jump, solid.normals) + 1.0 / solid.kn
+        w = opening + 1.0 / solid.kn
         cracks = float(np.sum(solid.areas[mask] * w[mask]))
         return self._wall(1) + float(solid.comm.allreduce(cracks, op=MPI.SUM))
 
-    def _coupling(self) -> np.ndarray:
+    def _coupling(self, opening: np.ndarray) -> np.ndarray:
         """How the cavity's volume moves with each network facet's pressure (m^3/Pa).
 
         By reciprocity (the stiffness is symmetric) ``dV / dp_j`` of a facet is
         the change of its fluid volume, area times opening, under a unit cavity
-        pressure (the solution in ``u_unit``): the joint pressure's load is the
-        work-conjugate of that volume as the cavity pressure's is of ``V``.
-        Zero on the facets the joint pressure does not load (closed cracks).
+        pressure (``opening``: the :func:`facet_openings` of ``u_unit``): the
+        joint pressure's load is the work-conjugate of that volume as the
+        cavity pressure's is of ``V``.  Zero on the facets the joint pressure
+        does not load (closed cracks).
         """
-        g = cavity_joint_coupling(self.solid, self.solid.u_unit)
+        g = cavity_joint_coupling(self.solid, opening)
         local = np.zeros(self.net.size)
         owned = self.solid.owned[self.facets]
         np.add.at(local, self.positions[owned], g[self.facets][owned])
@@ -397,8 +405,9 @@ class _PumpedCavity:
     def resolve(self, loads: Loads) -> None:
         """Solve at ``loads`` after a state change: new volume, slope and coupling."""
         self.solid.solve(loads, self.unit_loads())
-        self.slope = self._slope()
-        self.coupling = self._coupling()
+        opening = facet_openings(self.solid, self.solid.u_unit)
+        self.slope = self._slope(opening)
+        self.coupling = self._coupling(opening)
         self.volume = self._volume(loads)
         self.volume_joints = self.seep.pressure
 
@@ -668,4 +677,10 @@ def _worst_facet(solid: CDEMSolid, ratio: np.ndarray, mode: np.ndarray) -> tuple
     return best[1], np.asarray(best[2])
 
 
-__all__ = ["BREAKDOWN_DROP", "PumpingResult", "pump_with_seepage"]
+__all__ = [
+    "BREAKDOWN_DROP",
+    "PumpingResult",
+    "cavity_joint_coupling",
+    "facet_openings",
+    "pump_with_seepage",
+]

@@ -418,7 +418,13 @@ def _step_until(
     try:
         while frac.t < t_end * (1.0 - 1e-12):
             frac.dt = min(frac.dt, t_end - frac.t)
+            debris = frac.debris_cells
             rec = frac.step()
+            if frac.debris_cells != debris:
+                say(
+                    f"  t {rec.time:.4g} s: {frac.debris_cells} cell(s) cut loose from the "
+                    "walls in all are debris: their broken faces take the cavity pressure"
+                )
             for w in watchers:
                 w.step(frac, rec)
     except SimulationStopped as exc:
