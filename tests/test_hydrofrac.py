@@ -7,8 +7,10 @@ import dataclasses
 import math
 from functools import cache
 
+import dolfinx
 import numpy as np
 import pytest
+from dolfinx.mesh import GhostMode
 from mpi4py import MPI
 from tiny_solid import break_crack, crack_facets, tiny_solid
 
@@ -20,6 +22,7 @@ from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture, Simulatio
 from hfcdem.flow.balance import GroupBalance
 from hfcdem.flow.fluid import CarterLeakOff
 from hfcdem.mesh.build import mesh_geometry
+from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.fragments import Fragments
 from hfcdem.solvers import ValidityLimit
@@ -367,6 +370,79 @@ def test_a_block_cut_loose_from_the_wall_is_debris_in_the_cavity_fluid(monkeypat
     loose = _plate_cut_off_the_wall()
     with pytest.raises(ValidityLimit, match="slides or lifts out"):  # 1e4 sizes measured
         loose.step()
+
+
+def _plate_against_a_casing() -> HydraulicFracture:
+    """The tiny plate's left half cut loose, pressed by the cavity onto a casing.
+
+    Cavity: the left edge and the top edge left of the cut at x = 1; the bottom
+    edge left of it is a casing (a supporting wall keeping its in-situ
+    traction, 0.5 MPa); the cavity's 2 MPa on the top face is not balanced there.
+    """
+    mesh = dolfinx.mesh.create_rectangle(
+        MPI.COMM_WORLD, [[0.0, 0.0], [2.0, 1.0]], [4, 2], ghost_mode=GhostMode.shared_facet
+    )
+    mesh.topology.create_connectivity(1, 2)
+    sides = {
+        "left": lambda x: np.isclose(x[0], 0.0),
+        "top": lambda x: np.isclose(x[1], 1.0) & (x[0] < 1.0 + 1e-9),
+        "casing": lambda x: np.isclose(x[1], 0.0) & (x[0] < 1.0 + 1e-9),
+        "right": lambda x: np.isclose(x[0], 2.0),
+    }
+    found = [dolfinx.mesh.locate_entities_boundary(mesh, 1, where) for where in sides.values()]
+    facets = np.concatenate(found).astype(np.int32)
+    values = np.concatenate([np.full(len(f), k + 1) for k, f in enumerate(found)])
+    facets, first = np.unique(facets, return_index=True)  # a corner edge keeps one group
+    ftags = dolfinx.mesh.meshtags(mesh, 1, facets, values[first].astype(np.int32))
+    cells = np.arange(mesh.topology.index_map(2).size_local, dtype=np.int32)
+    ctags = dolfinx.mesh.meshtags(mesh, 2, cells, np.ones_like(cells))
+    names = {name: k + 1 for k, name in enumerate(sides)}
+    tmesh = TaggedMesh(mesh, ctags, ftags, {"rock": 1}, names)
+    solid = CDEMSolid(
+        tmesh,
+        ElasticMaterial(10e9, 0.25),
+        InSituStress(1e6, 0.5e6),
+        InterfaceModel(alpha=100, tensile_strength=1e6),
+        fixed=("right",),
+    )
+    break_crack(solid)
+    settings = FlowSettings(
+        cavity=("left", "top"),
+        supports=("casing",),
+        fidelity="uniform",
+        cavity_volume=1e-2,
+        initial_pressure=2e6,
+        dt_initial=0.5,
+        dt_max=0.5,
+    )
+    return HydraulicFracture(
+        solid, Fluid(bulk_modulus=1e9), Injection.constant_rate(1e-5), settings
+    )
+
+
+def test_a_block_cut_loose_against_a_casing_is_held_by_it(monkeypatch):
+    """Debris with a face on a supporting wall: its cells there stay put, the run goes on."""
+    hf = _plate_against_a_casing()
+    solid = hf.solid
+    assert hf.debris_cells == 8 and np.all(solid.released[crack_facets(solid)])
+    assert 0 < solid.held_cells.size < 8  # the cells on the casing
+    for _ in range(3):
+        record = hf.step()
+    assert record.time == pytest.approx(1.5) and record.mass_error < 1e-12
+    imap = solid.mesh.topology.index_map(2)
+    local = np.arange(imap.size_local, dtype=np.int32)
+    held = local[np.isin(imap.local_to_global(local), solid.held_cells)]
+    dofs = np.concatenate([solid.V.dofmap.cell_dofs(int(c)) for c in held]) if held.size else []
+    moved = np.abs(solid.u.x.array.reshape(-1, 2)[np.asarray(dofs, dtype=np.int64)]).max(
+        initial=0.0
+    )
+    assert MPI.COMM_WORLD.allreduce(moved, op=MPI.MAX) == 0.0
+    assert solid.comm.allreduce(float(np.abs(solid.u.x.array).max()), op=MPI.MAX) < 1e-3
+
+    # not held: the cavity's pressure on its top pushes the half through the casing
+    monkeypatch.setattr(CDEMSolid, "hold_cells", lambda self, cells: 0)
+    with pytest.raises(ValidityLimit, match="slides or lifts out"):
+        _plate_against_a_casing().step()
 
 
 def test_pressure_schedule_follows_the_pump_and_balances():

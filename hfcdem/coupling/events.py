@@ -8,6 +8,8 @@ more than its cells' size ends a run at the model's validity limit.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from mpi4py import MPI
 
@@ -60,19 +62,26 @@ def facets_to_break(solid: CDEMSolid, ratio: np.ndarray, cap: int | None) -> np.
     return select_breaking(ratio, solid.midpoints, rule, count, solid.comm)
 
 
-def release_debris(solid: CDEMSolid, fragments: Fragments) -> tuple[int, int]:
+def release_debris(
+    solid: CDEMSolid, fragments: Fragments, supports: Sequence[str] = ()
+) -> tuple[int, int, int]:
     """Hold open the faces of blocks newly cut loose from the cavity walls (collective).
 
     Such a block has no static equilibrium on its broken faces (a wedge at the
     wall slides out along them); the cavity's fluid surrounds it instead, and
-    its faces, and the rock behind them, take the cavity pressure.  Returns the
-    global count of faces released now and the debris' cells in all.
+    its faces, and the rock behind them, take the cavity pressure.  A loose
+    cell with a face on a supporting wall (``supports``: a cased wellbore's,
+    which keeps its in-situ traction) is held in place by it
+    (:meth:`CDEMSolid.hold_cells`): only there does the fluid not surround it.
+    Returns the global counts of faces released now, of the debris' cells in
+    all and of cells newly held.
     """
     facets, cells = fragments.debris()
     count = int(solid.comm.allreduce(int(np.count_nonzero(solid.owned[facets])), MPI.SUM))
     if count:
         solid.release_facets(facets)
-    return count, cells
+    held = solid.hold_cells(fragments.loose_cells_on(supports)) if supports else 0
+    return count, cells, held
 
 
 def check_small_displacement(solid: CDEMSolid, t: float) -> None:

@@ -127,7 +127,7 @@ class HydraulicFracture:
         self.first_break_time: float | None = None
         self.initial_failures = 0
         self.wall_start = time.perf_counter()
-        for name in s.cavity:
+        for name in (*s.cavity, *s.supports):
             solid.tmesh.facet_tag(name)  # clear error for unknown groups
         self._cavity_vertices = cavity_vertices(solid, s.cavity, s.injection_point)
         self._cavity_point = mean_point(solid.mesh, self._cavity_vertices)
@@ -493,14 +493,15 @@ class HydraulicFracture:
         """
         if self.fragments is None:
             return False
-        count, cells = release_debris(self.solid, self.fragments)
-        if not count:
+        count, cells, held = release_debris(self.solid, self.fragments, self.settings.supports)
+        if not (count or held):
             return False
-        self._last_change = f"{count} faces around debris released"
+        self._last_change = f"{count} faces around debris released, {held} cells held"
         if self.progress is not None:
             self.progress(
                 f"  t {t1:.4g} s: blocks cut loose from the wall are debris ({cells} cells "
-                f"in all): {count} broken faces around them take the cavity pressure"
+                f"in all): {count} broken faces around them take the cavity pressure; "
+                f"{held} cells against a supporting wall held by it"
             )
         self.debris_cells = cells
         return True
@@ -716,6 +717,7 @@ class HydraulicFracture:
         if history is None:
             history = [StepRecord.from_row(row) for row in data.get("history", [])]
         self.history = list(history)
+        self._release_debris(self.t)  # the held cells are not in the checkpoint: found again
         self.rebuild("resume")
 
     def write_history(self, path: str | os.PathLike[str]) -> None:

@@ -272,7 +272,7 @@ class _PumpedCavity:
 
         See :func:`~hfcdem.coupling.events.release_debris`.
         """
-        count, cells = release_debris(self.solid, self.fragments)
+        count, cells, _ = release_debris(self.solid, self.fragments)
         if count:
             self.debris_news.append(
                 f"  t {t:.4g} s: {cells - self.debris_cells} cell(s) cut loose from the wall "

@@ -28,12 +28,16 @@ class FlowSettings:
     intact interfaces along every open crack at the cavity pressure, so it
     permeates the joints ahead of the fracture as it grows (the paper's
     saturation front through its joints, taken as instantaneous).
+    ``supports``: exterior facet groups that support the rock without being
+    part of the cavity (a cased wellbore's wall, which keeps its in-situ
+    traction): a block cut loose against one is held in place by it.
     ``rigid_cavity``: the stored cavity volume ignores the wall motion (the
     pressure still loads the wall): the paper's CDEM stores fluid only in its
     joints, so its pressurisation rate is Kw Q / V alone.
     """
 
     cavity: tuple[str, ...] = ()
+    supports: tuple[str, ...] = ()
     injection_point: tuple[float, ...] | None = None
     fidelity: str = "viscous"
     filling: str = "saturation"
@@ -65,6 +69,9 @@ class FlowSettings:
             raise ValueError(
                 "give the cavity wall groups or an injection_point: fluid needs a way in"
             )
+        both = sorted(set(self.supports) & set(self.cavity))
+        if both:
+            raise ValueError(f"supports must not be cavity walls too: {', '.join(both)}")
         for name in ("dt_initial", "dt_min", "dt_max"):
             value = getattr(self, name)
             if not value > 0.0:

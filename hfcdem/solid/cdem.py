@@ -165,8 +165,12 @@ class CDEMSolid:
             vx = self.vertex_coords
             self.strength_points = [vx[:, k] for k in range(vx.shape[1])]
         self.t0, self.c0 = self._strengths()
-        self._bcs = dg_boundary_conditions(self.V, tmesh, degree, rollers or {}, fixed)
+        self._fixed_bcs = dg_boundary_conditions(self.V, tmesh, degree, rollers or {}, fixed)
+        self._bcs = list(self._fixed_bcs)
         self.fixed_groups = tuple(fixed)  # faces held in every component: blocks there stay
+        # cells held in place by a supporting wall (hold_cells), and a count of their changes
+        self.held_cells: np.ndarray = np.zeros(0, dtype=np.int64)  # global indices, sorted
+        self.held_version = 0
         nitsche = nitsche_penalty if nitsche_penalty is not None else 10.0 * (degree + 1) ** 2
         self.forms = SolidForms(
             tmesh, self.V, material, interfaces, self.sigma0, nitsche, self.facet_functions
@@ -177,7 +181,7 @@ class CDEMSolid:
         self.band = InterfaceBand(mesh, self.interface_facets, *band, all_free=mode == "full")
         self._recovery = StressRecovery(self.u, material)
         self._reduced: ReducedSystem | None = None
-        self._reduced_version = -1
+        self._reduced_version: tuple[int, int] | None = None
         # the compiled stiffness form of the last interface states (a new one costs ~60 ms)
         self._stiffness_form: tuple[np.ndarray, int, dolfinx.fem.Form] | None = None
         # load forms of the current interface states and band, by their terms
@@ -328,6 +332,31 @@ class CDEMSolid:
         """The (homogeneous) Dirichlet conditions on the DG dofs."""
         return self._bcs
 
+    def hold_cells(self, cells: np.ndarray) -> int:
+        """Hold the cells with global indices ``cells`` in place from now on (collective).
+
+        Their displacement from the in-situ state is zero (a Dirichlet condition on
+        all their DG unknowns): a block cut loose against a wall that supports the
+        rock, such as a cased wellbore's, is held by it.  Cells already held stay
+        held.  Returns the number of cells newly held (the same on every rank).
+        """
+        cells = np.unique(np.concatenate(self.comm.allgather(np.asarray(cells, np.int64))))
+        held = np.union1d(self.held_cells, cells)
+        new = int(held.size - self.held_cells.size)
+        if new == 0:
+            return 0
+        self.held_cells = held
+        tdim = self.mesh.topology.dim
+        imap = self.mesh.topology.index_map(tdim)
+        local = np.arange(imap.size_local + imap.num_ghosts, dtype=np.int32)
+        mine = local[np.isin(imap.local_to_global(local), held)]
+        dofs = [self.V.dofmap.cell_dofs(int(c)) for c in mine]
+        blocks = np.unique(np.concatenate(dofs)).astype(np.int32) if dofs else np.zeros(0, np.int32)
+        zero = np.zeros(self.gdim, dtype=dolfinx.default_scalar_type)
+        self._bcs = [*self._fixed_bcs, dolfinx.fem.dirichletbc(zero, blocks, self.V)]
+        self.held_version += 1
+        return new
+
     def assemble_stiffness(self) -> tuple[dolfinx.fem.Form, PETSc.Mat]:
         """Assemble the stiffness of the current interface states (Dirichlet rows/columns set).
 
@@ -388,7 +417,7 @@ class CDEMSolid:
         reduced = self.reduced_system() if self.mode == "reduced" else None
         ksp = self.operator.solver(
             values,
-            self.band.version,
+            (self.band.version, self.held_version),  # new Dirichlet rows: assemble afresh
             reduced.reduce if reduced is not None else None,
         )
         self.solve_seconds += time.perf_counter() - t0
@@ -426,12 +455,13 @@ class CDEMSolid:
 
     def reduced_system(self) -> ReducedSystem:
         """Return the reduced system of the current band (rebuilt when the band grew)."""
-        if self._reduced is None or self._reduced_version != self.band.version:
+        version = (self.band.version, self.held_version)
+        if self._reduced is None or self._reduced_version != version:
             glued = glued_facet_set(self.interface_facets, ~self.band.free)
             self._reduced = ReducedSystem(
                 self.V, self._bcs, glued, self.petsc_options, prefix=self.prefix
             )
-            self._reduced_version = self.band.version
+            self._reduced_version = version
         return self._reduced
 
     @property

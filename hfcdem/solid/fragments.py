@@ -99,6 +99,12 @@ class Fragments:
             rock = np.array([np.argmax(np.bincount(label))])
         return ids[~np.isin(label, rock)]
 
+    def loose_cells_on(self, groups: Sequence[str]) -> np.ndarray:
+        """Global indices of the loose cells with a face in the facet groups ``groups`` (sorted)."""
+        if not groups:
+            return np.zeros(0, dtype=np.int64)
+        return np.intersect1d(self.loose_cells(), cells_on(self.solid, groups))
+
     def debris(self) -> tuple[np.ndarray, int]:
         """Broken local facets around debris, not yet released, and the debris' cell count.
 

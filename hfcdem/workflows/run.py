@@ -152,8 +152,11 @@ def build_fracture(scene: Scene, solid: CDEMSolid) -> HydraulicFracture:
     if not cavity and point is None:
         raise SceneError("geometry", "the scene has no wellbore, tunnel or injection point")
     inlet = None if cavity or point is None else tuple(point[: solid.gdim])
+    # a cased wellbore's wall (not loaded) supports the rock: it holds blocks cut loose
+    casing = tuple(n for n in names if n.startswith("wellbore") and n not in cavity)
     settings = FlowSettings(
         cavity=cavity,
+        supports=casing if cavity else (),
         injection_point=inlet,
         fidelity=phys.solver.fidelity,
         filling=phys.solver.filling,
@@ -344,6 +347,7 @@ def _summarise(
         "rebuild_seconds": frac.rebuild_seconds,
         "rebuild_causes": dict(frac.rebuild_causes),  # contact, break, band, fill, ...
         "debris_cells": frac.debris_cells,  # cells cut loose from the walls, in the fluid
+        "held_cells": int(solid.held_cells.size),  # loose cells a supporting wall holds
         "solid": solid.mode,
         "free_interfaces": solid.band.count(),
         "solved_unknowns": solid.num_dofs,  # at the end (reduced: grows with the band)
