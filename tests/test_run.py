@@ -12,7 +12,7 @@ from hfcdem.config.scene import load_scene, parse_scene
 from hfcdem.config.tables import SceneError
 from hfcdem.io.series import read_pvd
 from hfcdem.workflows.observers import StepObserver
-from hfcdem.workflows.run import OutputInUse, pressurised_groups, run_scene
+from hfcdem.workflows.run import OutputInUse, pressurised_groups, run_scene, supporting_walls
 
 KGD = "meshes/scenes/kgd_strip.toml"
 BOREHOLE = "meshes/scenes/borehole_plate.toml"
@@ -332,6 +332,10 @@ def test_a_cased_wellbore_leaves_only_the_tunnel_walls_pressurised():
     )
     # a borehole without tunnels is open hole whatever the setting
     assert pressurised_groups(["outer", "wellbore_wall"], "cased") == ("wellbore_wall",)
+    # the casing supports the rock: it holds the blocks cut loose against it
+    for wellbore, held in (("cased", ("wellbore_wall",)), ("open", ())):
+        assert supporting_walls(names, pressurised_groups(names, wellbore)) == held
+    assert supporting_walls(names, ()) == ()  # no cavity, no debris
 
 
 def test_set_replaces_a_scene_field_and_is_checked_like_the_file(shared_tmp_path, capsys):

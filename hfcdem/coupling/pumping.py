@@ -160,12 +160,15 @@ def pump_with_seepage(
     progress: Callable[[str], None] | None = None,
     max_state_iterations: int = 200,
     frames: Frames | None = None,
+    supports: Sequence[str] = (),
 ) -> PumpingResult:
     """Pump into the ``cavity`` facet groups and follow breaks and pressure (collective).
 
     ``solid`` in the full mode; ``aperture``: hydraulic aperture of the joints
-    (m).  Runs for ``pumping.duration`` in ``pumping.steps`` steps (more where
-    a step is shortened onto a break).  ``frames`` is called (collectively) at
+    (m); ``supports``: walls that hold the blocks cut loose against them (a
+    cased wellbore's; :func:`~hfcdem.coupling.events.release_debris`).  Runs
+    for ``pumping.duration`` in ``pumping.steps`` steps (more where a step is
+    shortened onto a break).  ``frames`` is called (collectively) at
     the start and after every step with the time and the fluid pressure and
     saturation per local facet (:meth:`_PumpedCavity.fields`).
     """
@@ -173,7 +176,7 @@ def pump_with_seepage(
         raise ValueError("pump_with_seepage needs CDEMSolid(mode='full') (pressure on glued faces)")
     if not (math.isfinite(aperture) and aperture > 0.0):
         raise ValueError(f"aperture must be a joint aperture > 0 m, got {aperture!r}")
-    for name in cavity:
+    for name in (*cavity, *supports):
         solid.tmesh.facet_tag(name)  # clear error for unknown groups
     start = Loads(cavity={name: pumping.initial_pressure for name in cavity})
     try:
@@ -184,7 +187,7 @@ def pump_with_seepage(
             None, None, None, None, None, None, p0, 0.0, True, stop.broken, 0,
             stopped=f"the excavated rock fails before pumping: {stop}",
         )  # fmt: skip
-    run = _PumpedCavity(solid, tuple(cavity), fluid, aperture, pumping)
+    run = _PumpedCavity(solid, tuple(cavity), fluid, aperture, pumping, tuple(supports))
     try:
         return run.run(initial_failures, progress, max_state_iterations, frames)
     finally:
@@ -220,8 +223,10 @@ class _PumpedCavity:
         fluid: Fluid,
         aperture: float,
         pumping: CavityPumping,
+        supports: tuple[str, ...] = (),
     ) -> None:
         self.solid, self.cavity, self.fluid = solid, cavity, fluid
+        self.supports = supports
         self.aperture, self.pumping = aperture, pumping
         self.kw = fluid.bulk_modulus
         self.walls = cavity_vertices(solid, cavity, None)
@@ -272,7 +277,11 @@ class _PumpedCavity:
 
         See :func:`~hfcdem.coupling.events.release_debris`.
         """
-        count, cells, _ = release_debris(self.solid, self.fragments)
+        count, cells, held = release_debris(self.solid, self.fragments, self.supports)
+        if held:
+            self.debris_news.append(
+                f"  t {t:.4g} s: {held} loose cell(s) against a supporting wall held by it"
+            )
         if count:
             self.debris_news.append(
                 f"  t {t:.4g} s: {cells - self.debris_cells} cell(s) cut loose from the wall "

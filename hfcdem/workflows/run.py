@@ -131,6 +131,17 @@ def pressurised_groups(names: Any, wellbore: str) -> tuple[str, ...]:
     return tuple(sorted(n for n in names if n.startswith(("wellbore", "perforation"))))
 
 
+def supporting_walls(names: Any, cavity: tuple[str, ...]) -> tuple[str, ...]:
+    """Return the wellbore wall groups the pressure does not load (a cased wellbore's).
+
+    They keep their in-situ traction and hold the blocks cut loose against them
+    (:func:`~hfcdem.coupling.events.release_debris`).
+    """
+    if not cavity:
+        return ()
+    return tuple(sorted(n for n in names if n.startswith("wellbore") and n not in cavity))
+
+
 def wall_area(tmesh: Any, groups: tuple[str, ...]) -> float:
     """Return the total area (length in 2D) of facet groups ``groups``."""
     import dolfinx
@@ -152,11 +163,9 @@ def build_fracture(scene: Scene, solid: CDEMSolid) -> HydraulicFracture:
     if not cavity and point is None:
         raise SceneError("geometry", "the scene has no wellbore, tunnel or injection point")
     inlet = None if cavity or point is None else tuple(point[: solid.gdim])
-    # a cased wellbore's wall (not loaded) supports the rock: it holds blocks cut loose
-    casing = tuple(n for n in names if n.startswith("wellbore") and n not in cavity)
     settings = FlowSettings(
         cavity=cavity,
-        supports=casing if cavity else (),
+        supports=supporting_walls(names, cavity),
         injection_point=inlet,
         fidelity=phys.solver.fidelity,
         filling=phys.solver.filling,
@@ -248,7 +257,8 @@ def run_scene(
         from hfcdem.workflows.seepage_ramp import run_seepage_ramp
 
         cavity = pressurised_groups(tmesh.facet_names, phys.wellbore)
-        return run_seepage_ramp(scene, solid, cavity, out, say, record)
+        supports = supporting_walls(tmesh.facet_names, cavity)
+        return run_seepage_ramp(scene, solid, cavity, out, say, record, supports)
     return _run_coupled(scene, solid, out, say, record, resume, observers)
 
 

@@ -101,8 +101,12 @@ def run_seepage_ramp(
     out: Path,
     say: Callable[[str], None],
     record: Callable[[], dict[str, Any]],
+    supports: tuple[str, ...] = (),
 ) -> dict[str, Any]:
-    """Run the ramp of a seepage scene on ``solid`` and write its results into ``out``."""
+    """Run the ramp of a seepage scene on ``solid`` and write its results into ``out``.
+
+    ``supports``: walls that hold the blocks cut loose against them (a pumped run).
+    """
     phys, comm = scene.physics, solid.comm
     ramp = seepage_loading(scene)
     if solid.mode != "full":
@@ -116,7 +120,7 @@ def run_seepage_ramp(
         f"joints of hydraulic aperture {phys.joint_aperture * 1e6:.3g} um fill from dry"
     )
     if isinstance(ramp, CavityPumping):
-        return _run_pumped(scene, solid, cavity, ramp, out, say, record)
+        return _run_pumped(scene, solid, (cavity, supports), ramp, out, say, record)
     result = ramp_breakdown(solid, cavity, phys.fluid, phys.joint_aperture, ramp, progress=say)
     if result.stopped:
         say(f"stopped: {result.stopped}")
@@ -213,14 +217,17 @@ def _first_crack(location: np.ndarray | None, mode: int | None) -> dict[str, Any
 def _run_pumped(
     scene: Scene,
     solid: CDEMSolid,
-    cavity: tuple[str, ...],
+    walls: tuple[tuple[str, ...], tuple[str, ...]],
     pumping: CavityPumping,
     out: Path,
     say: Callable[[str], None],
     record: Callable[[], dict[str, Any]],
 ) -> dict[str, Any]:
-    """Pump for the scene's duration past the first break; write the results into ``out``."""
-    phys, comm = scene.physics, solid.comm
+    """Pump for the scene's duration past the first break; write the results into ``out``.
+
+    ``walls``: the cavity's wall groups and the supporting ones.
+    """
+    (cavity, supports), phys, comm = walls, scene.physics, solid.comm
     interval = phys.output_interval or pumping.duration / 20.0
     series = InterfaceFrames(out, "joints", pumping.duration, interval, comm)
 
@@ -228,7 +235,14 @@ def _run_pumped(
         series.offer(t, *_joint_fields(solid, pressure, saturation))
 
     result = pump_with_seepage(
-        solid, cavity, phys.fluid, phys.joint_aperture, pumping, progress=say, frames=frame
+        solid,
+        cavity,
+        phys.fluid,
+        phys.joint_aperture,
+        pumping,
+        progress=say,
+        frames=frame,
+        supports=supports,
     )
     if result.stopped:
         say(f"stopped: {result.stopped}")
