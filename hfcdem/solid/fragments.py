@@ -8,7 +8,7 @@ has no static equilibrium once the loads on it outgrow its friction (a wedge at
 the tunnel wall slides out along its broken faces, by metres in a
 small-displacement solid).
 
-A loose fragment that touches the cavity wall is debris: the cavity's fluid
+A loose fragment that touches the cavity wall, or touches debris, is debris: the fluid
 surrounds it, so its broken faces take the cavity pressure and are held open
 (:meth:`~hfcdem.solid.cdem.CDEMSolid.release_facets`).  Under one pressure on
 every face it is in equilibrium, and the rock behind it carries that pressure as
@@ -108,14 +108,17 @@ class Fragments:
     def debris(self) -> tuple[np.ndarray, int]:
         """Broken local facets around debris, not yet released, and the debris' cell count.
 
-        Debris: the loose fragments with a cell on the cavity walls.
+        Debris: the loose fragments with a cell on the cavity walls, and the loose
+        fragments that touch debris (through broken faces): the fluid fills the
+        gaps of a pile of loose blocks at the wall, and a block next to debris
+        whose faces take the cavity pressure has lost its support there.
         """
         solid, none = self.solid, (np.zeros(0, dtype=np.int64), 0)
         loose = self.loose_cells()
         on_wall = np.intersect1d(loose, self.wall_cells)
         if on_wall.size == 0:
             return none
-        pairs = self._intact_pairs()
+        pairs = self._nodes.reshape(-1, 2)  # every interface, intact or broken
         ids, label = _components(loose, pairs[np.all(np.isin(pairs, loose), axis=1)])
         debris = ids[np.isin(label, label[np.isin(ids, on_wall)])]
         around = np.any(np.isin(_global_cells(solid, solid.cells), debris), axis=1)
