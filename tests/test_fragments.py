@@ -91,6 +91,26 @@ def test_debris_faces_are_released_and_hold_the_block_in_place():
     assert _largest_jump_over_size(solid) > 1e4 * LOOSE_JUMP  # measured 3.0e4
 
 
+def test_a_loose_block_next_to_debris_is_debris_too():
+    """Cuts at x = 0.5 and x = 1: the strip at the wall is debris, the strip behind it too.
+
+    The fluid fills the gap between them, so the second strip, whose face
+    toward the first takes the cavity pressure, has lost its support there.
+    """
+    solid = tiny_solid()
+    cuts = np.flatnonzero(
+        np.isclose(solid.midpoints[:, 0], 0.5) | np.isclose(solid.midpoints[:, 0], 1.0)
+    )
+    mine = cuts[solid.owned[cuts]]
+    solid.break_facets(mine, np.ones(len(mine), dtype=np.int8), 0.0)
+    fragments = Fragments(solid, ("left",))
+    assert fragments.loose_cells().size == 8
+    facets, cells = fragments.debris()
+    assert cells == 8  # both strips, not only the one on the wall (4 cells)
+    assert np.array_equal(np.sort(facets), np.sort(cuts))
+    assert fragments.loose_cells_on(("left",)).size == 2  # the strip's triangles with a face on it
+
+
 def _cube_with_one_cell_cut_out(comm: MPI.Comm) -> tuple[CDEMSolid, np.ndarray]:
     """Unit cube, fixed at x = 0, every interior facet an interface; one cell's 4 faces broken."""
     mesh = dolfinx.mesh.create_unit_cube(
