@@ -340,6 +340,7 @@ def _plate_cut_off_the_wall() -> HydraulicFracture:
     settings = FlowSettings(
         cavity=("left",),
         fidelity="uniform",
+        debris="released",
         cavity_volume=1e-2,
         initial_pressure=2e6,
         dt_initial=0.5,
@@ -410,6 +411,7 @@ def _plate_against_a_casing() -> HydraulicFracture:
         cavity=("left", "top"),
         supports=("casing",),
         fidelity="uniform",
+        debris="released",
         cavity_volume=1e-2,
         initial_pressure=2e6,
         dt_initial=0.5,

@@ -139,6 +139,7 @@ def test_every_default_has_one_home():
     assert solver.break_tolerance == flow.break_tolerance
     assert solver.max_breaks_per_iteration == flow.max_breaks_per_iteration
     assert solver.break_rule == model.break_rule
+    assert solver.debris == flow.debris
     solid = inspect.signature(CDEMSolid).parameters
     assert solver.solid == solid["mode"].default
     assert (solver.band_threshold, solver.band_rings) == solid["band"].default

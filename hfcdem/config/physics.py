@@ -66,6 +66,9 @@ them so a run's record can print what was assumed.  Any invalid field raises
     solid = "full"              # "full": DG springs on every interface of the zone (the
                                 # reference); "reduced": springs only in a band that grows,
                                 # continuous blocks elsewhere (DG1, direct; hfcdem.solid.band)
+    debris = "stay"             # or "released": blocks cut loose at the cavity walls join the
+                                # cavity's fluid (their faces at its pressure; a cased wall
+                                # holds those against it); "stay": held by contact alone
     band_threshold = 0.3        # reduced: a glued interface joins the band when its traction
                                 # (from the cells' stress) reaches this share of its strength
     band_rings = 2              # reduced: vertex rings of neighbours freed with each facet
@@ -126,6 +129,7 @@ class SolverSettings:
     solid: str = "full"
     band_threshold: float = 0.3
     band_rings: int = 2
+    debris: str = "stay"
 
 
 @dataclass(frozen=True)
@@ -466,6 +470,9 @@ def _read_solver(r: _Reader) -> SolverSettings:
             choices=("vertices", "midpoint"),
         ),
         break_tolerance=r.get(so, "break_tolerance", "number", (SolverSettings, "break_tolerance")),
+        debris=r.get(
+            so, "debris", "string", (SolverSettings, "debris"), choices=("stay", "released")
+        ),
         linear_solver=r.get(
             so,
             "linear_solver",

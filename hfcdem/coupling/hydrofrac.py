@@ -146,7 +146,8 @@ class HydraulicFracture:
         at_walls = np.isin(solid.vertex_ids, self._cavity_vertices).any(axis=1)
         solid.free_interfaces(np.asarray(at_walls, dtype=bool), rings=1)
         # blocks cut loose from the walls become debris in the cavity's fluid
-        self.fragments = Fragments(solid, s.cavity) if s.cavity else None
+        released = s.cavity and s.debris == "released"
+        self.fragments = Fragments(solid, s.cavity) if released else None
         self.debris_cells = 0
         self._release_debris(0.0)
         self.rebuild()

@@ -28,6 +28,12 @@ class FlowSettings:
     intact interfaces along every open crack at the cavity pressure, so it
     permeates the joints ahead of the fracture as it grows (the paper's
     saturation front through its joints, taken as instantaneous).
+    ``debris``: ``"released"``: blocks cut loose at the cavity walls join the
+    cavity's fluid (:func:`~hfcdem.coupling.events.release_debris`);
+    ``"stay"``: they are held by contact and friction alone, and a run ends at
+    the validity limit when one slides out.  Not the default: with a thin
+    calibrated cavity (a wall film) the debris' expansion on release swings the
+    pressure (the lab specimen: 5 to 9 MPa and back between steps).
     ``supports``: exterior facet groups that support the rock without being
     part of the cavity (a cased wellbore's wall, which keeps its in-situ
     traction): a block cut loose against one is held in place by it.
@@ -38,6 +44,7 @@ class FlowSettings:
 
     cavity: tuple[str, ...] = ()
     supports: tuple[str, ...] = ()
+    debris: str = "stay"
     injection_point: tuple[float, ...] | None = None
     fidelity: str = "viscous"
     filling: str = "saturation"
@@ -63,6 +70,8 @@ class FlowSettings:
     def __post_init__(self) -> None:
         if self.fidelity not in ("viscous", "uniform"):
             raise ValueError(f"fidelity must be 'viscous' or 'uniform', got {self.fidelity!r}")
+        if self.debris not in ("stay", "released"):
+            raise ValueError(f"debris must be 'stay' or 'released', got {self.debris!r}")
         if self.filling not in ("saturation", "no_lag"):
             raise ValueError(f"filling must be 'saturation' or 'no_lag', got {self.filling!r}")
         if not self.cavity and self.injection_point is None:

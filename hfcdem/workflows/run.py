@@ -166,6 +166,7 @@ def build_fracture(scene: Scene, solid: CDEMSolid) -> HydraulicFracture:
     settings = FlowSettings(
         cavity=cavity,
         supports=supporting_walls(names, cavity),
+        debris=phys.solver.debris,
         injection_point=inlet,
         fidelity=phys.solver.fidelity,
         filling=phys.solver.filling,
