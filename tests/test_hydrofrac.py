@@ -365,6 +365,11 @@ def test_a_block_cut_loose_from_the_wall_is_debris_in_the_cavity_fluid(monkeypat
     assert np.allclose(crack_pressure, hf.p_cavity, rtol=1e-12)
     # the released faces join the cavity's fluid: its open volume is stored
     assert record.fracture_volume > 0.0
+    # a resumed run finds its debris released and counted
+    again = _plate_cut_off_the_wall()
+    again.restore(hf.checkpoint(), list(hf.history))
+    assert again.debris_cells == 8 and np.all(again.solid.released[crack_facets(again.solid)])
+    assert again.step().injection_pressure == pytest.approx(hf.step().injection_pressure, rel=1e-9)
 
     # the same plate with the release switched off: the half slides out of the rock
     monkeypatch.setattr(Fragments, "debris", lambda self: (np.zeros(0, dtype=np.int64), 0))

@@ -495,6 +495,7 @@ class HydraulicFracture:
         if self.fragments is None:
             return False
         count, cells, held = release_debris(self.solid, self.fragments, self.settings.supports)
+        self.debris_cells = cells  # all of it, released before or now (a resume recounts)
         if not (count or held):
             return False
         self._last_change = f"{count} faces around debris released, {held} cells held"
