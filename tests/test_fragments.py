@@ -109,6 +109,16 @@ def test_a_loose_block_next_to_debris_is_debris_too():
     assert cells == 8  # both strips, not only the one on the wall (4 cells)
     assert np.array_equal(np.sort(facets), np.sort(cuts))
     assert fragments.loose_cells_on(("left",)).size == 2  # the strip's triangles with a face on it
+    # the loose cells found once give the same debris and the same cells on the wall
+    loose = fragments.loose_cells()
+    again, count = fragments.debris(loose)
+    assert count == cells and np.array_equal(again, facets)
+    assert np.array_equal(
+        fragments.loose_cells_on(("left",), loose), fragments.loose_cells_on(("left",))
+    )
+    # none loose (an empty set passed in): no debris, none on the wall
+    assert fragments.debris(loose[:0])[1] == 0
+    assert fragments.loose_cells_on(("left",), loose[:0]).size == 0
 
 
 def _cube_with_one_cell_cut_out(comm: MPI.Comm) -> tuple[CDEMSolid, np.ndarray]:

@@ -372,7 +372,9 @@ def test_a_block_cut_loose_from_the_wall_is_debris_in_the_cavity_fluid(monkeypat
     assert again.step().injection_pressure == pytest.approx(hf.step().injection_pressure, rel=1e-9)
 
     # the same plate with the release switched off: the half slides out of the rock
-    monkeypatch.setattr(Fragments, "debris", lambda self: (np.zeros(0, dtype=np.int64), 0))
+    monkeypatch.setattr(
+        Fragments, "debris", lambda self, loose=None: (np.zeros(0, dtype=np.int64), 0)
+    )
     loose = _plate_cut_off_the_wall()
     with pytest.raises(ValidityLimit, match="slides or lifts out"):  # 1e4 sizes measured
         loose.step()

@@ -76,11 +76,12 @@ def release_debris(
     Returns the global counts of faces released now, of the debris' cells in
     all and of cells newly held.
     """
-    facets, cells = fragments.debris()
+    loose = fragments.loose_cells()  # the same on every rank; found once for both uses
+    facets, cells = fragments.debris(loose)
     count = int(solid.comm.allreduce(int(np.count_nonzero(solid.owned[facets])), MPI.SUM))
     if count:
         solid.release_facets(facets)
-    held = solid.hold_cells(fragments.loose_cells_on(supports)) if supports else 0
+    held = solid.hold_cells(fragments.loose_cells_on(supports, loose)) if supports else 0
     return count, cells, held
 
 

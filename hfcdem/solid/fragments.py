@@ -81,6 +81,7 @@ class Fragments:
         zone = np.unique(self._nodes)
         self.anchored = np.intersect1d(held, zone)  # only cells with interfaces matter
         self.wall_cells = np.intersect1d(cells_on(solid, walls), zone)
+        self._groups_cells: dict[tuple[str, ...], np.ndarray] = {}  # the mesh never changes
 
     def _intact_pairs(self) -> np.ndarray:
         own = self.solid.owned
@@ -99,22 +100,32 @@ class Fragments:
             rock = np.array([np.argmax(np.bincount(label))])
         return ids[~np.isin(label, rock)]
 
-    def loose_cells_on(self, groups: Sequence[str]) -> np.ndarray:
-        """Global indices of the loose cells with a face in the facet groups ``groups`` (sorted)."""
+    def loose_cells_on(self, groups: Sequence[str], loose: np.ndarray | None = None) -> np.ndarray:
+        """Global indices of the loose cells with a face in the facet groups ``groups`` (sorted).
+
+        ``loose``: the :meth:`loose_cells` of the current states, when the
+        caller has them (they are found again otherwise).
+        """
         if not groups:
             return np.zeros(0, dtype=np.int64)
-        return np.intersect1d(self.loose_cells(), cells_on(self.solid, groups))
+        key = tuple(groups)
+        if key not in self._groups_cells:
+            self._groups_cells[key] = cells_on(self.solid, groups)  # collective, once
+        loose = self.loose_cells() if loose is None else loose
+        return np.intersect1d(loose, self._groups_cells[key])
 
-    def debris(self) -> tuple[np.ndarray, int]:
+    def debris(self, loose: np.ndarray | None = None) -> tuple[np.ndarray, int]:
         """Broken local facets around debris, not yet released, and the debris' cell count.
 
         Debris: the loose fragments with a cell on the cavity walls, and the loose
         fragments that touch debris (through broken faces): the fluid fills the
         gaps of a pile of loose blocks at the wall, and a block next to debris
         whose faces take the cavity pressure has lost its support there.
+        ``loose``: the :meth:`loose_cells` of the current states, when the
+        caller has them.
         """
         solid, none = self.solid, (np.zeros(0, dtype=np.int64), 0)
-        loose = self.loose_cells()
+        loose = self.loose_cells() if loose is None else loose
         on_wall = np.intersect1d(loose, self.wall_cells)
         if on_wall.size == 0:
             return none
