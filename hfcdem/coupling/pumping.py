@@ -242,16 +242,14 @@ class _PumpedCavity:
             for u in (solid.u, solid.u_unit)
         ]
         self.cracks = self._joined_cracks()
+        self.shut = np.zeros(solid.num_facets, dtype=bool)  # set by _volume
         self.facets, self.net, self.positions, self.seep = self._network(None, None)
         self.p = pumping.initial_pressure
         loads = self.loads(self.p, self.seep.pressure)
-        solid.solve(loads, self.unit_loads())
+        solid.solve(loads)
         self.wall_ref = self._wall(0)
-        opening = facet_openings(solid, solid.u_unit)  # one evaluation for both
-        self.slope = self._slope(opening)
-        self.coupling = self._coupling(opening)
         self.volume = self._volume(loads)  # at self.p
-        self.volume_joints = self.seep.pressure  # the joints' pressures of self.volume
+        self._linearise()
         self.rebalances = 0  # balances repeated on the measured volume
         self.solves_before = solid.solves
         self.m0 = self.volume * (1.0 + self.p / self.kw) + self.joint_content()
@@ -354,10 +352,15 @@ class _PumpedCavity:
         )
 
     def unit_loads(self) -> Loads:
-        """Return a unit pressure in the cavity and its joined cracks, nothing else."""
+        """Return a unit pressure in the cavity and its joined cracks but the shut ones.
+
+        Shut cracks (:attr:`shut`) hold no fluid, so their faces' motion is not
+        part of the cavity's volume: the load conjugate to that volume leaves
+        them out (:meth:`_linearise`).
+        """
         return Loads(
             cavity={name: 1.0 for name in self.cavity},
-            crack_pressure=self.cracks.astype(float),
+            crack_pressure=(self.cracks & ~self.shut).astype(float),
             in_situ_factor=0.0,
         )
 
@@ -373,24 +376,49 @@ class _PumpedCavity:
         """Cavity volume at the solved state (m^3; per metre in 2D) (collective).
 
         Keeps the part of it in the open cracks joined to the cavity in
-        :attr:`crack_volume`.
+        :attr:`crack_volume`.  Sets :attr:`shut`: the open joined cracks (owned:
+        a facet's owner assembles its load) whose faces are pressed together;
+        their physical opening is clipped at 0, so their volume does not follow
+        the loads until they part.
         """
         solid = self.solid
         mask = self._crack_mask()
         opening = solid.snapshot(loads).opening if mask.any() else np.zeros(solid.num_facets)
+        self.shut = mask & (opening <= 0.0)
         cracks = float(np.sum(solid.areas[mask] * opening[mask]))
         self.crack_volume = float(solid.comm.allreduce(cracks, op=MPI.SUM))
         return self.v_mesh + self._wall(0) - self.wall_ref + self.crack_volume
 
+    def _linearise(self) -> None:
+        """Slope and coupling of the cavity's volume at the solved state (collective).
+
+        Solves for :meth:`unit_loads` into ``u_unit`` with the current
+        factorisation; the volume of :meth:`_volume` (and :attr:`shut`) must be
+        of the solved state.
+        """
+        solid = self.solid
+        a_form, ksp = solid.factorize()  # the one of the last solve: no new factorisation
+        solid.solve_load(ksp, a_form, solid.load_form(self.unit_loads()), solid.u_unit)
+        opening = facet_openings(solid, solid.u_unit)  # one evaluation for both
+        self.slope = self._slope(opening)
+        self.coupling = self._coupling(opening)
+        self.volume_joints = self.seep.pressure  # the joints' pressures of self.volume
+
     def _slope(self, opening: np.ndarray) -> float:
         """``dV/dP`` of the cavity from the unit solution in ``u_unit`` (collective).
 
-        ``opening``: the unit solution's :func:`facet_openings`.
+        ``opening``: the unit solution's :func:`facet_openings`.  The pressure
+        loads every open joined crack, shut or not, while the volume counts the
+        cracks that are not shut; ``u_unit`` is the response to the load
+        conjugate to that volume, so by reciprocity the slope is the work of the
+        whole unit pressure on it, plus the fluid's own overlap ``1 / kn`` of the
+        cracks not shut (:meth:`CDEMSolid.snapshot`).
         """
         solid = self.solid
         mask = self._crack_mask()
-        w = opening + 1.0 / solid.kn
+        w = opening + np.where(self.shut, 0.0, 1.0 / solid.kn)
         cracks = float(np.sum(solid.areas[mask] * w[mask]))
+        # the cavity's wall term of the same work: the wall's volume change under u_unit
         return self._wall(1) + float(solid.comm.allreduce(cracks, op=MPI.SUM))
 
     def _coupling(self, opening: np.ndarray) -> np.ndarray:
@@ -413,12 +441,9 @@ class _PumpedCavity:
 
     def resolve(self, loads: Loads) -> None:
         """Solve at ``loads`` after a state change: new volume, slope and coupling."""
-        self.solid.solve(loads, self.unit_loads())
-        opening = facet_openings(self.solid, self.solid.u_unit)
-        self.slope = self._slope(opening)
-        self.coupling = self._coupling(opening)
+        self.solid.solve(loads)
         self.volume = self._volume(loads)
-        self.volume_joints = self.seep.pressure
+        self._linearise()
 
     # ------------------------------------------------------------- balance
 
