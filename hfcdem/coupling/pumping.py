@@ -242,7 +242,7 @@ class _PumpedCavity:
             for u in (solid.u, solid.u_unit)
         ]
         self.cracks = self._joined_cracks()
-        self.shut = np.zeros(solid.num_facets, dtype=bool)  # set by _volume
+        self.shut: np.ndarray = np.zeros(solid.num_facets, dtype=bool)  # set by _volume
         self.facets, self.net, self.positions, self.seep = self._network(None, None)
         self.p = pumping.initial_pressure
         loads = self.loads(self.p, self.seep.pressure)
