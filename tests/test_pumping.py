@@ -28,6 +28,7 @@ from hfcdem.coupling.pumping import (
 )
 from hfcdem.solid.forms import Loads
 from hfcdem.solid.interfaces import FacetState
+from hfcdem.solid.states import SLIP
 
 Q = 2e-6  # m^2/s per metre of borehole (seed 001)
 
@@ -216,6 +217,14 @@ def test_the_balance_follows_the_joints_so_the_solid_is_solved_once_per_step(pla
     assert run.max_mass_error < 1e-12
 
 
+def _wall_facets(solid):
+    """The owned interface facets nearest the borehole's wall (they touch it)."""
+    r = np.hypot(solid.midpoints[:, 0], solid.midpoints[:, 1])
+    zone = np.flatnonzero(solid.owned & (r < 6 * A))
+    near = solid.comm.allgather(float(np.min(r[zone])) if zone.size else math.inf)
+    return zone[r[zone] < min(near) + 1e-9]
+
+
 def test_shut_cracks_keep_the_volume_linear_in_the_pressures(plate):
     """Open cracks joined to the cavity whose faces are pressed together hold no fluid.
 
@@ -228,10 +237,7 @@ def test_shut_cracks_keep_the_volume_linear_in_the_pressures(plate):
     balanced every later step twice.
     """
     solid = _solid(plate)
-    r = np.hypot(solid.midpoints[:, 0], solid.midpoints[:, 1])
-    zone = np.flatnonzero(solid.owned & (r < 6 * A))
-    near = solid.comm.allgather(float(np.min(r[zone])) if zone.size else math.inf)
-    mine = zone[r[zone] < min(near) + 1e-9]  # the facets closest to the wall: they touch it
+    mine = _wall_facets(solid)
     solid.break_facets(mine, np.full(len(mine), FacetState.TENSILE, dtype=np.int8), 0.0)
     solid.release_facets(mine)
     run = pumping_module._PumpedCavity(
@@ -259,5 +265,41 @@ def test_shut_cracks_keep_the_volume_linear_in_the_pressures(plate):
         assert np.array_equal(run.shut, shut)
         # measured 9e-13 (counting them: 21 % off)
         assert change == pytest.approx(float(run.coupling @ dpj), rel=1e-8)
+    finally:
+        run.seep.destroy()
+
+
+def test_friction_set_without_a_state_change_moves_the_volume_by_reciprocity(plate):
+    """Sliding faces take a friction from their normal traction at every contact check.
+
+    That load changes with no change of state, so the balance adds its effect
+    on the cavity's volume, the friction's work on the unit solution's jumps
+    (before, every quiet step of No. 2 after its first shear break was
+    balanced twice).  Here: wall facets broken in shear and sliding, their
+    friction raised by 1 MPa along them; the measured volume change is that.
+    """
+    solid = _solid(plate)
+    mine = _wall_facets(solid)
+    solid.break_facets(mine, np.full(len(mine), FacetState.SHEAR, dtype=np.int8), 0.0)
+    n = solid.normals[mine]
+    along = np.stack([-n[:, 1], n[:, 0]], axis=1)  # the facet's tangent (2D)
+    solid.contact[mine] = SLIP
+    solid.friction_traction[mine] = 2e6 * along
+    solid.sync_ghost_states()
+    run = pumping_module._PumpedCavity(
+        solid, WALL, Fluid(viscosity=1.0), 5e-6, CavityPumping(Q, 1.0, steps=1)
+    )
+    try:
+        assert run._friction_shift() == 0.0  # the friction the volume was measured with
+        v0 = run.volume
+        solid.friction_traction[mine] += 1e6 * along
+        solid.sync_ghost_states()
+        shift = run._friction_shift()
+        loads = run.loads(run.p, run.seep.pressure)
+        solid.solve(loads)
+        change = run._volume(loads) - v0
+        assert abs(shift) > run.slope * 1e3  # the volume of 1 kPa in the cavity (here 0.26 MPa)
+        assert change == pytest.approx(shift, rel=1e-8)  # measured 2e-12
+        assert run._friction_shift() == 0.0  # measured again
     finally:
         run.seep.destroy()

@@ -243,6 +243,8 @@ class _PumpedCavity:
         ]
         self.cracks = self._joined_cracks()
         self.shut: np.ndarray = np.zeros(solid.num_facets, dtype=bool)  # set by _volume
+        self._friction_ref = solid.friction_traction.copy()  # set by _volume
+        self._unit_jumps = np.zeros((solid.num_facets, solid.gdim))  # set by _linearise
         self.facets, self.net, self.positions, self.seep = self._network(None, None)
         self.p = pumping.initial_pressure
         loads = self.loads(self.p, self.seep.pressure)
@@ -385,6 +387,7 @@ class _PumpedCavity:
         mask = self._crack_mask()
         opening = solid.snapshot(loads).opening if mask.any() else np.zeros(solid.num_facets)
         self.shut = mask & (opening <= 0.0)
+        self._friction_ref = solid.friction_traction.copy()
         cracks = float(np.sum(solid.areas[mask] * opening[mask]))
         self.crack_volume = float(solid.comm.allreduce(cracks, op=MPI.SUM))
         return self.v_mesh + self._wall(0) - self.wall_ref + self.crack_volume
@@ -399,10 +402,26 @@ class _PumpedCavity:
         solid = self.solid
         a_form, ksp = solid.factorize()  # the one of the last solve: no new factorisation
         solid.solve_load(ksp, a_form, solid.load_form(self.unit_loads()), solid.u_unit)
-        opening = facet_openings(solid, solid.u_unit)  # one evaluation for both
+        self._unit_jumps = solid.jumps(solid.u_unit)  # one evaluation for all three
+        opening = -np.einsum("fi,fi->f", self._unit_jumps, solid.normals)  # facet_openings
         self.slope = self._slope(opening)
         self.coupling = self._coupling(opening)
         self.volume_joints = self.seep.pressure  # the joints' pressures of self.volume
+
+    def _friction_shift(self) -> float:
+        """Return the cavity volume's change by the friction set since it was measured (collective).
+
+        Sliding faces carry a friction set from their normal traction at each
+        contact check (:meth:`InterfaceStates.switch_contacts`), a load that
+        changes without a state change.  By reciprocity its effect on the
+        volume is the friction's work on the unit solution's jumps (the load
+        acts at the midpoint, where the jumps are taken).
+        """
+        solid = self.solid
+        change = solid.friction_traction - self._friction_ref
+        work = np.einsum("fi,fi->f", change, self._unit_jumps)
+        local = float(np.sum(solid.areas[solid.owned] * work[solid.owned]))
+        return float(solid.comm.allreduce(local, op=MPI.SUM))
 
     def _slope(self, opening: np.ndarray) -> float:
         """``dV/dP`` of the cavity from the unit solution in ``u_unit`` (collective).
@@ -447,19 +466,20 @@ class _PumpedCavity:
 
     # ------------------------------------------------------------- balance
 
-    def balance(self, dt: float, target: float, saved: np.ndarray) -> float:
+    def balance(self, dt: float, target: float, saved: np.ndarray, shift: float = 0.0) -> float:
         """Cavity pressure that holds ``target`` fluid; steps the seepage there.
 
         One Newton on the joints and the cavity pressure together
         (:meth:`JointSeepage.step_pumped`), from the joints of the last balance
         from the same start; should it fail, the bracketed secant on trial
-        seepage steps (:meth:`balance_by_secant`).
+        seepage steps (:meth:`balance_by_secant`).  ``shift``: the volume's
+        change by the friction set since it was measured (:meth:`_friction_shift`).
         """
         last = self._last_balance
         guess = last[1] if last is not None and last[0] is saved else None
         self.seep.restore(saved)
         storage = CavityStorage(
-            self.volume, self.slope, self.p, self.kw, self.coupling, self.volume_joints
+            self.volume + shift, self.slope, self.p, self.kw, self.coupling, self.volume_joints
         )
         try:
             p = self.seep.step_pumped(dt, storage, target, guess)
@@ -469,11 +489,13 @@ class _PumpedCavity:
             raise _Dry(str(dry)) from None
         except RuntimeError:
             self.secant_balances += 1
-            return self.balance_by_secant(dt, target, saved)
+            return self.balance_by_secant(dt, target, saved, shift)
 
-    def balance_by_secant(self, dt: float, target: float, saved: np.ndarray) -> float:
+    def balance_by_secant(
+        self, dt: float, target: float, saved: np.ndarray, shift: float = 0.0
+    ) -> float:
         """Do :meth:`balance` by a secant on the cavity pressure, a seepage step per trial."""
-        v0, p0, slope, kw, seep = self.volume, self.p, self.slope, self.kw, self.seep
+        v0, p0, slope, kw, seep = self.volume + shift, self.p, self.slope, self.kw, self.seep
         storage = CavityStorage(v0, slope, p0, kw, self.coupling, self.volume_joints)
 
         def residual(p: float) -> float:
@@ -528,16 +550,18 @@ class _PumpedCavity:
         start_net, start_q = self.net, self.seep.save()
         start_p, start_pj = self.p, self.seep.pressure
         start_volume, start_slope, start_joints = self.volume, self.slope, self.volume_joints
+        start_friction = self._friction_ref
         start_loads = self.loads(start_p, start_pj)
         u_start = solid.u.x.array.copy()
         saved, landings, broken, rounds, first, top = start_q, 0, 0, 0, None, -math.inf
         passes = 0  # since the last break
         while passes < max_iterations:
             passes += 1
-            p = self.balance(dt, target, saved)
+            shift = self._friction_shift()
+            p = self.balance(dt, target, saved, shift)
             pj = self.seep.pressure
             loads = self.loads(p, pj)
-            predicted = self.volume + self.slope * (p - self.p)
+            predicted = self.volume + shift + self.slope * (p - self.p)
             predicted += float(self.coupling @ (pj - self.volume_joints))
             solid.solve(loads)
             check_small_displacement(solid, t + dt)
@@ -557,7 +581,7 @@ class _PumpedCavity:
                     target = self.m0 + self.pumping.rate * (t + dt)
                     self.seep.restore(saved)
                     self.p, self.volume, self.slope = start_p, start_volume, start_slope
-                    self.volume_joints = start_joints
+                    self.volume_joints, self._friction_ref = start_joints, start_friction
                     solid.u.x.array[:] = u_start
                     continue
             top = max(top, p)
