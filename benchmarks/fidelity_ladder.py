@@ -16,7 +16,9 @@ wall time.  The rungs:
   (``wall_joints = "seepage"``, 1 um hydraulic aperture), water, no film: no
   knob of the joints' fluid left;
 - ``seepage-kw``: the same with the paper's fluid stiffness Kw = 10 MPa
-  (Tables 1 and 3) in the cavity and the joints instead of water's.
+  (Tables 1 and 3) in the cavity and the joints instead of water's;
+- ``seepage-reduced``: ``seepage`` on the reduced solid (``solver.solid``):
+  springs on every interface of the zone, the rock outside it continuous.
 
     make run CMD="python3 benchmarks/fidelity_ladder.py --rungs uniform uniform-water viscous"
     make run CMD="python3 benchmarks/fidelity_ladder.py --rungs seepage"   # about 20 min coarse
@@ -36,19 +38,21 @@ from hfcdem.config.scene import load_scene
 from hfcdem.workflows.run import run_scene
 
 ROOT = Path(__file__).resolve().parents[1]
-RUNGS = ("uniform", "uniform-water", "viscous", "seepage", "seepage-kw")
+RUNGS = ("uniform", "uniform-water", "viscous", "seepage", "seepage-kw", "seepage-reduced")
 
 
 def scene_text(rung: str) -> str:
     """No. 2's scene file for ``rung``."""
     text = (ROOT / "meshes/scenes/perforation_no2.toml").read_text()
-    if rung in ("uniform-water", "seepage"):
+    if rung in ("uniform-water", "seepage", "seepage-reduced"):
         text = re.sub(r"(?m)^wall_film = .*\n", "", text)
         text = re.sub(r'(?m)^bulk_modulus = "[^"]*"', 'bulk_modulus = "2.2 GPa"', text)
     if rung == "seepage-kw":
         text = re.sub(r"(?m)^wall_film = .*\n", "", text)
-    if rung in ("seepage", "seepage-kw"):
+    if rung in ("seepage", "seepage-kw", "seepage-reduced"):
         text = re.sub(r'(?m)^wall_joints = "[a-z]+"', 'wall_joints = "seepage"', text)
+    if rung == "seepage-reduced":
+        text = text.replace("[solver]\n", '[solver]\nsolid = "reduced"\n', 1)
     if rung == "viscous":
         text = re.sub(r'(?m)^fidelity = "[a-z]+"', 'fidelity = "viscous"', text)
     return text.replace('name = "perforation_no2"', f'name = "no2_{rung.replace("-", "_")}"')

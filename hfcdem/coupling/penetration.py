@@ -184,14 +184,14 @@ def ramp_breakdown(
     :class:`CavityPumping` rate into the cavity (its pressure follows from its
     storage and the joints' intake).
 
-    ``solid`` must be in the full mode with every interface intact or a
-    pre-existing crack; ``aperture``: hydraulic aperture of the joints (m), one
+    ``solid`` with every interface intact or a pre-existing crack, full or
+    reduced (a reduced solid's zone is freed first: the joints' pressure loads
+    every interface of it); ``aperture``: hydraulic aperture of the joints (m), one
     value or one per network facet.
     """
-    if solid.mode != "full":
-        raise ValueError("ramp_breakdown needs CDEMSolid(mode='full') (pressure on glued faces)")
     for name in cavity:
         solid.tmesh.facet_tag(name)  # clear error for unknown groups
+    solid.free_interfaces(np.ones(solid.num_facets, dtype=bool))  # (0 in the full mode)
     joints = np.flatnonzero((solid.state == FacetState.INTACT) & ~solid.is_crack)
     # the state the ramp starts from (excavated, cavity at P0): what fails there, e.g. on
     # stress noise where the wall mesh changes, breaks first and is not the breakdown

@@ -164,20 +164,21 @@ def pump_with_seepage(
 ) -> PumpingResult:
     """Pump into the ``cavity`` facet groups and follow breaks and pressure (collective).
 
-    ``solid`` in the full mode; ``aperture``: hydraulic aperture of the joints
-    (m); ``supports``: walls that hold the blocks cut loose against them (a
-    cased wellbore's; :func:`~hfcdem.coupling.events.release_debris`).  Runs
-    for ``pumping.duration`` in ``pumping.steps`` steps (more where a step is
-    shortened onto a break).  ``frames`` is called (collectively) at
-    the start and after every step with the time and the fluid pressure and
-    saturation per local facet (:meth:`_PumpedCavity.fields`).
+    ``solid``: full, or reduced (every interface of its zone is freed first:
+    the joints' pressure loads them all, so only the rock outside the zone stays
+    continuous); ``aperture``: hydraulic aperture of the joints (m);
+    ``supports``: walls that hold the blocks cut loose against them (a cased
+    wellbore's; :func:`~hfcdem.coupling.events.release_debris`).  Runs for
+    ``pumping.duration`` in ``pumping.steps`` steps (more where a step is
+    shortened onto a break).  ``frames`` is called (collectively) at the start
+    and after every step with the time and the fluid pressure and saturation
+    per local facet (:meth:`_PumpedCavity.fields`).
     """
-    if solid.mode != "full":
-        raise ValueError("pump_with_seepage needs CDEMSolid(mode='full') (pressure on glued faces)")
     if not (math.isfinite(aperture) and aperture > 0.0):
         raise ValueError(f"aperture must be a joint aperture > 0 m, got {aperture!r}")
     for name in (*cavity, *supports):
         solid.tmesh.facet_tag(name)  # clear error for unknown groups
+    solid.free_interfaces(np.ones(solid.num_facets, dtype=bool))  # (0 in the full mode)
     start = Loads(cavity={name: pumping.initial_pressure for name in cavity})
     try:
         initial_failures = settle_excavation(solid, start)
