@@ -2,8 +2,10 @@
 
 Runs No. 2 (``meshes/scenes/perforation_no2.toml``) for its whole injection at
 one resolution, one rung after another, and prints a table: peak or breakdown
-pressure, first tensile break, failures, steps, solid solves and re-balances (seepage),
-wall time.  The rungs:
+pressure, first tensile break, failures, steps, solid solves, stiffness
+factorisations and re-balances (seepage), wall time.  For the seepage rungs a
+second table splits the cost between steps in which interfaces broke and quiet
+ones (from the run's ``step_costs.csv``).  The rungs:
 
 - ``uniform``: the scene as shipped (one pressure in the cavity and its
   cracks; the calibrated 5 um wall film, the paper's Kw = 10 MPa, joints along
@@ -27,6 +29,7 @@ wall time.  The rungs:
 from __future__ import annotations
 
 import argparse
+import csv
 import re
 import tempfile
 import time
@@ -63,13 +66,38 @@ def _pressure(summary: dict, key: str) -> str:
     return f"{v:.2f}" if isinstance(v, int | float) else "-"
 
 
+def cost_split(path: Path) -> list[tuple[str, ...]]:
+    """Steps with breaks and quiet ones: steps, solves, factorisations, seconds (rows)."""
+    if not path.exists():
+        return []
+    with path.open() as f:
+        rows = [{k: float(v) for k, v in r.items()} for r in csv.DictReader(f)]
+    out = []
+    for name, breaks in (("breaks", True), ("quiet", False)):
+        part = [r for r in rows if (r["broken"] > 0) == breaks]
+        total = {k: sum(r[k] for r in part) for k in rows[0]} if part else {}
+        out.append(
+            (
+                name,
+                str(len(part)),
+                f"{total.get('solid_solves', 0):.0f}",
+                f"{total.get('factorisations', 0):.0f}",
+                f"{total.get('factorise_s', 0):.0f}",
+                f"{total.get('wall_s', 0):.0f}",
+            )
+        )
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rungs", nargs="+", choices=RUNGS, default=list(RUNGS[:3]))
     ap.add_argument("--resolution", default="coarse")
+    ap.add_argument("--progress", action="store_true", help="print the runs' progress")
     args = ap.parse_args()
     comm = MPI.COMM_WORLD
-    rows = []
+    say = print if args.progress and comm.rank == 0 else None
+    rows, splits = [], []
     for rung in args.rungs:
         with tempfile.TemporaryDirectory() as tmp:
             tmp = comm.bcast(tmp, root=0)
@@ -78,8 +106,9 @@ def main() -> None:
                 path.write_text(scene_text(rung))
             comm.barrier()
             t0 = time.perf_counter()
-            s = run_scene(load_scene(path, args.resolution), Path(tmp) / "out", force=True)
+            s = run_scene(load_scene(path, args.resolution), Path(tmp) / "out", force=True, say=say)
             wall = time.perf_counter() - t0
+            splits += [(rung, *row) for row in cost_split(Path(tmp) / "out/step_costs.csv")]
             comm.barrier()
         rows.append(
             (
@@ -90,6 +119,7 @@ def main() -> None:
                 f"{s.get('tensile_failures', '-')} / {s.get('shear_failures', '-')}",
                 str(s.get("steps", "-")),
                 str(s.get("solid_solves", "-")),
+                str(s.get("factorisations", "-")),
                 str(s.get("rebalances", "-")),
                 f"{wall:.0f}",
                 str(s.get("stopped") or ""),
@@ -99,11 +129,22 @@ def main() -> None:
             print(f"{rung}: done in {wall:.0f} s: " + " | ".join(rows[-1][1:]), flush=True)
     if comm.rank == 0:
         head = ("rung", "breakdown MPa", "peak MPa", "first break MPa", "tensile / shear",
-                "steps", "solid solves", "re-balances", "wall s", "stopped")  # fmt: skip
-        print("| " + " | ".join(head) + " |")
-        print("|" + "---|" * len(head))
-        for row in rows:
-            print("| " + " | ".join(row) + " |")
+                "steps", "solid solves", "factorisations", "re-balances", "wall s",
+                "stopped")  # fmt: skip
+        _table(head, rows)
+        if splits:
+            print()
+            head = ("rung", "steps", "count", "solid solves", "factorisations",
+                    "factorise s", "wall s")  # fmt: skip
+            _table(head, splits)
+
+
+def _table(head: tuple[str, ...], rows: list) -> None:
+    """Print ``rows`` as a Markdown table under ``head``."""
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    for row in rows:
+        print("| " + " | ".join(row) + " |")
 
 
 if __name__ == "__main__":

@@ -15,6 +15,7 @@ from mpi4py import MPI
 
 from hfcdem.config.scene import load_scene
 from hfcdem.config.tables import SceneError
+from hfcdem.coupling.pumping import COST_COLUMNS
 from hfcdem.io.series import read_pvd
 from hfcdem.mesh.build import create_scene_mesh
 from hfcdem.solid.forms import Loads
@@ -156,6 +157,10 @@ def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
     assert summary["max_mass_error"] < 1e-9
     rows = (shared_tmp_path / "pumped" / "history.csv").read_text().splitlines()
     assert rows[0].startswith("time_s,cavity_pressure_Pa") and len(rows) > 200
+    costs = (shared_tmp_path / "pumped" / "step_costs.csv").read_text().splitlines()
+    assert costs[0].split(",") == list(COST_COLUMNS) and len(costs) == len(rows)
+    factorisations = sum(int(float(r.split(",")[4])) for r in costs[1:])
+    assert factorisations == summary["factorisations"] > 0
     # the joints over time (Fig. 14): the start and every 1 s (duration / 20) to 20 s
     frames = read_pvd(shared_tmp_path / "pumped" / "joints.pvd")
     assert len(frames) == 21 and frames[0][0] == 0.0

@@ -43,6 +43,7 @@ that takes no fluid and leaves the pressure rising.
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -79,6 +80,18 @@ from hfcdem.solvers import ValidityLimit
 
 #: called with the time, the fluid pressure and the saturation per local facet
 Frames = Callable[[float, np.ndarray, np.ndarray], None]
+
+#: columns of :attr:`PumpingResult.costs`, one row per pumped step
+COST_COLUMNS = (
+    "time_s",
+    "step_s",
+    "broken",
+    "solid_solves",
+    "factorisations",
+    "rebalances",
+    "factorise_s",
+    "wall_s",
+)
 
 #: a peak counts as the breakdown once the pressure has fallen this fraction below it
 BREAKDOWN_DROP = 0.01
@@ -123,7 +136,11 @@ class PumpingResult:
     ``debris_cells``: cells of the blocks cut loose from the walls, whose faces
     the fluid took (:mod:`hfcdem.solid.fragments`); ``rebalances``: balances
     repeated because the solved volume was not the balanced one;
-    ``solid_solves``: the solid's solves during pumping.
+    ``solid_solves``: the solid's solves during pumping; ``factorisations``:
+    the stiffness factorisations during pumping (fresh or numeric only, one per
+    change of the interfaces' states); ``costs`` rows, one per step, of
+    :data:`COST_COLUMNS`: where the run spent its solves and seconds (the
+    seconds are rank 0's and vary from run to run, the counts do not).
     """
 
     first_pressure: float | None
@@ -149,6 +166,8 @@ class PumpingResult:
     debris_cells: int = 0
     rebalances: int = 0
     solid_solves: int = 0
+    factorisations: int = 0
+    costs: list[tuple[float, ...]] = field(default_factory=list)
 
 
 def pump_with_seepage(
@@ -255,6 +274,7 @@ class _PumpedCavity:
         self._linearise()
         self.rebalances = 0  # balances repeated on the measured volume
         self.solves_before = solid.solves
+        self.factorisations_before = self._factorisations()
         self.m0 = self.volume * (1.0 + self.p / self.kw) + self.joint_content()
         self.worst = 0.0
         self.secant_balances = 0  # balances the joint Newton could not do
@@ -262,6 +282,11 @@ class _PumpedCavity:
         self._last_balance: tuple[np.ndarray, np.ndarray] | None = None
 
     # ------------------------------------------------------------- network
+
+    def _factorisations(self) -> tuple[int, float]:
+        """Count the solid's factorisations so far (fresh and numeric) and their seconds."""
+        counts, seconds = self.solid.operator.counts, self.solid.operator.seconds
+        return counts["assembled"] + counts["updated"], seconds["factorise"]
 
     def _joined_cracks(self) -> np.ndarray:
         """Per local facet: broken and joined to the cavity through broken facets.
@@ -643,6 +668,7 @@ class _PumpedCavity:
         solid, pumping = self.solid, self.pumping
         t, n = 0.0, 0
         history: list[tuple[float, ...]] = []
+        costs: list[tuple[float, ...]] = []
         first: tuple[float, float, int, np.ndarray] | None = None
         peak, peak_time, stopped, limit = self.p, 0.0, None, False
         breakdown: tuple[float, float] | None = None
@@ -651,6 +677,7 @@ class _PumpedCavity:
             frames(t, *self.fields())
         while t < pumping.duration * (1.0 - 1e-12):
             dt = min(pumping.dt, pumping.duration - t)
+            before = (solid.solves, self.rebalances, *self._factorisations(), time.perf_counter())
             try:
                 dt, broken, worst, top = self.step(t, dt, max_iterations)
             except _Dry as stop:
@@ -660,6 +687,12 @@ class _PumpedCavity:
                 stopped, limit = str(stop), True
                 break
             t, n = t + dt, n + 1
+            factorisations, seconds = self._factorisations()
+            costs.append(
+                (t, dt, broken, solid.solves - before[0], factorisations - before[2],
+                 self.rebalances - before[1], seconds - before[3],
+                 time.perf_counter() - before[4])
+            )  # fmt: skip
             if frames is not None:
                 frames(t, *self.fields())
             if worst is not None and first is None:
@@ -715,6 +748,8 @@ class _PumpedCavity:
             debris_cells=self.debris_cells,
             rebalances=self.rebalances,
             solid_solves=solid.solves - self.solves_before,
+            factorisations=self._factorisations()[0] - self.factorisations_before[0],
+            costs=costs,
         )
 
 

@@ -38,7 +38,12 @@ from mpi4py import MPI
 from hfcdem.config.scene import Scene
 from hfcdem.config.tables import SceneError
 from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakdown
-from hfcdem.coupling.pumping import BREAKDOWN_DROP, PumpingResult, pump_with_seepage
+from hfcdem.coupling.pumping import (
+    BREAKDOWN_DROP,
+    COST_COLUMNS,
+    PumpingResult,
+    pump_with_seepage,
+)
 from hfcdem.io.files import write_csv, write_interfaces, write_json
 from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import InterfaceFrames
@@ -261,6 +266,7 @@ def _run_pumped(
         "joints_holding_pressure",
     ]
     write_csv(out / "history.csv", names, [list(r) for r in result.history], comm)
+    write_csv(out / "step_costs.csv", list(COST_COLUMNS), [list(r) for r in result.costs], comm)
     _write_joints(out / "joints.vtu", solid, result.joint_pressure, result.saturation)
     first, pb = result.first_pressure, result.breakdown
     location = result.first_location
@@ -287,6 +293,7 @@ def _run_pumped(
         "secant_balances": result.secant_balances,
         "rebalances": result.rebalances,
         "solid_solves": result.solid_solves,
+        "factorisations": result.factorisations,
         "debris_cells": result.debris_cells,
         "steps": result.steps,
         "stopped": result.stopped,
