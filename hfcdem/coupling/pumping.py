@@ -140,7 +140,7 @@ class PumpingResult:
     the stiffness factorisations during pumping (fresh or numeric only, one per
     change of the interfaces' states); ``costs`` rows, one per step, of
     :data:`COST_COLUMNS`: where the run spent its solves and seconds (the
-    seconds are each rank's own and vary from run to run, the counts do not).
+    seconds are each rank's own, the counts the same on every rank).
     """
 
     first_pressure: float | None
