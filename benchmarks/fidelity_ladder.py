@@ -23,7 +23,9 @@ ones (from the run's ``step_costs.csv``).  The rungs:
   springs on every interface of the zone, the rock outside it continuous.
 
     make run CMD="python3 benchmarks/fidelity_ladder.py --rungs uniform uniform-water viscous"
-    make run CMD="python3 benchmarks/fidelity_ladder.py --rungs seepage"   # about 20 min coarse
+    make run CMD="python3 benchmarks/fidelity_ladder.py --rungs seepage"   # about 15 min coarse
+    make run CMD="python3 benchmarks/fidelity_ladder.py --rungs seepage \
+        --resolution default --duration '0.1 s'"
 """
 
 from __future__ import annotations
@@ -94,6 +96,9 @@ def main() -> None:
     ap.add_argument("--rungs", nargs="+", choices=RUNGS, default=list(RUNGS[:3]))
     ap.add_argument("--resolution", default="coarse")
     ap.add_argument("--progress", action="store_true", help="print the runs' progress")
+    ap.add_argument(
+        "--duration", help="pump for this long instead of the scene's 120 s (e.g. '2 s')"
+    )
     args = ap.parse_args()
     comm = MPI.COMM_WORLD
     say = print if args.progress and comm.rank == 0 else None
@@ -106,7 +111,9 @@ def main() -> None:
                 path.write_text(scene_text(rung))
             comm.barrier()
             t0 = time.perf_counter()
-            s = run_scene(load_scene(path, args.resolution), Path(tmp) / "out", force=True, say=say)
+            over = {"injection.duration": args.duration} if args.duration else None
+            scene = load_scene(path, args.resolution, overrides=over)
+            s = run_scene(scene, Path(tmp) / "out", force=True, say=say)
             wall = time.perf_counter() - t0
             splits += [(rung, *row) for row in cost_split(Path(tmp) / "out/step_costs.csv")]
             comm.barrier()
