@@ -15,9 +15,10 @@ after which what was computed so far is kept.
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 
+import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -220,6 +221,27 @@ def check_ksp(ksp: PETSc.KSP, what: str, hint: str = "") -> None:
     raise SolverError(text, reason, info)
 
 
+def solve_together(ksp: PETSc.KSP, rhs: Sequence[PETSc.Vec]) -> np.ndarray:
+    """Solve ``K x_i = b_i`` for all ``i`` in one call of a direct ``ksp`` (collective).
+
+    Returns this rank's rows of the solutions, one column each (a copy).
+    """
+    n_local, n = rhs[0].getLocalSize(), rhs[0].getSize()
+    sizes = ((n_local, n), (PETSc.DECIDE, len(rhs)))
+    B = PETSc.Mat().createDense(sizes, comm=rhs[0].getComm())
+    B.setUp()
+    X = B.duplicate()
+    columns = B.getDenseArray()  # this rank's rows, one column per right-hand side
+    for i, b in enumerate(rhs):
+        columns[:, i] = b.getArray(readonly=True)
+    B.assemble()
+    ksp.matSolve(B, X)
+    solved = np.array(X.getDenseArray(readonly=True))
+    B.destroy()
+    X.destroy()
+    return solved
+
+
 __all__ = [
     "DIRECT_CHOLESKY",
     "DIRECT_LU",
@@ -234,4 +256,5 @@ __all__ = [
     "reason_name",
     "retry_factorisation",
     "setup_factorisation",
+    "solve_together",
 ]

@@ -491,3 +491,21 @@ def test_a_load_form_is_compiled_once_per_interface_states_and_gives_a_fresh_for
     broken = solid.load_form(second)
     assert broken is not form
     assert same(vector(broken), fresh(second))
+
+
+@pytest.mark.parametrize("mode", ["full", "reduced"])
+def test_a_load_and_its_unit_solved_together_are_those_solved_one_by_one(mode):
+    """``solve(loads, unit)`` hands MUMPS both right-hand sides at once: the same answer."""
+    from borehole import WALL, borehole_plate, borehole_solid
+
+    solid = borehole_solid(borehole_plate(), mode)
+    solid.free_interfaces(np.ones(solid.num_facets, dtype=bool))  # springs, not glue
+    loads = Loads(cavity={WALL[0]: 10 * MPa})
+    unit = Loads(cavity={WALL[0]: 1.0}, in_situ_factor=0.0)
+    solid.solve(loads, unit)
+    together = solid.u.x.array.copy(), solid.u_unit.x.array.copy()
+    for item, expected in zip((loads, unit), together, strict=True):
+        solid.solve(item)
+        scale = MPI.COMM_WORLD.allreduce(float(np.abs(expected).max()), op=MPI.MAX)
+        gap = MPI.COMM_WORLD.allreduce(float(np.abs(solid.u.x.array - expected).max()), op=MPI.MAX)
+        assert 0.0 < scale and gap <= 1e-12 * scale

@@ -11,6 +11,7 @@ from hfcdem.solvers import (
     reason_name,
     retry_factorisation,
     setup_factorisation,
+    solve_together,
 )
 
 
@@ -113,3 +114,23 @@ def test_setup_factorisation_gives_a_working_factorisation(comm):
     assert x.max()[1] == pytest.approx(0.25)
     for obj in (ksp, A, b, x):
         obj.destroy()
+
+
+def test_right_hand_sides_solved_together_are_those_solved_one_by_one(comm):
+    values = [1.0 + i for i in range(9)]
+    A = diagonal(comm, values)
+    ksp = create_ksp(A, "hfcdem_test_together_", DIRECT_LU)
+    lo, hi = A.getOwnershipRange()
+    rhs = []
+    for k in range(3):
+        b = A.createVecLeft()
+        b.setArray([(k + 1.0) * (i + 2.0) for i in range(lo, hi)])
+        rhs.append(b)
+    solved = solve_together(ksp, rhs)
+    assert solved.shape == (hi - lo, 3)
+    for k, b in enumerate(rhs):
+        x = A.createVecRight()
+        ksp.solve(b, x)
+        assert solved[:, k] == pytest.approx(x.getArray(), rel=1e-15)
+        exact = [(k + 1.0) * (i + 2.0) / (1.0 + i) for i in range(lo, hi)]
+        assert solved[:, k] == pytest.approx(exact, rel=1e-15)

@@ -23,7 +23,7 @@ from petsc4py import PETSc
 
 from hfcdem.flow.balance import VoidVolumes
 from hfcdem.flow.network import gather_rows
-from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solid.cdem import SOLVE_BATCH, CDEMSolid
 from hfcdem.solid.forms import OPEN_FACETS, SPRING, Loads
 
 
@@ -171,7 +171,7 @@ def condense(
     """
     a_form, ksp = solid.factorize()
     base = dolfinx.fem.Function(solid.V)
-    solid.solve_load(ksp, a_form, solid.load_form(Loads(cavity=dict.fromkeys(cavity, 0.0))), base)
+    rhs = [solid.assemble_load(a_form, solid.load_form(Loads(cavity=dict.fromkeys(cavity, 0.0))))]
     v, nrm = ufl.TestFunction(solid.V), ufl.FacetNormal(solid.mesh)
     # per-facet values through a CR function (exact at the single quadrature point)
     cr = solid.facet_function(np.zeros(solid.num_facets))
@@ -189,15 +189,19 @@ def condense(
             L += c_cav * joints
     L_form = dolfinx.fem.form(L)
     cr_dofs = solid.facet_dofs()
-    columns = []
+    columns = [dolfinx.fem.Function(solid.V) for _ in range(size)]
+    targets = [base, *columns]
     for g in range(size):
         cr.x.array[:] = 0.0
         cr.x.array[cr_dofs] = ((group == g) & is_open).astype(float)
         cr.x.scatter_forward()
         c_cav.value = 1.0 if g == 0 else 0.0
-        col = dolfinx.fem.Function(solid.V)
-        solid.solve_load(ksp, a_form, L_form, col)
-        columns.append(col)
+        rhs.append(solid.assemble_load(a_form, L_form))
+        if len(rhs) == SOLVE_BATCH:  # MUMPS reads its factor once per batch
+            solid.solve_assembled(ksp, rhs, targets[g + 2 - len(rhs) : g + 2])
+            rhs = []
+    if rhs:
+        solid.solve_assembled(ksp, rhs, targets[size + 1 - len(rhs) :])
     solid.solves += 1
     return base, columns
 

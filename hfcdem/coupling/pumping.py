@@ -418,16 +418,17 @@ class _PumpedCavity:
         self.crack_volume = float(solid.comm.allreduce(cracks, op=MPI.SUM))
         return self.v_mesh + self._wall(0) - self.wall_ref + self.crack_volume
 
-    def _linearise(self) -> None:
+    def _linearise(self, solved: bool = False) -> None:
         """Slope and coupling of the cavity's volume at the solved state (collective).
 
         Solves for :meth:`unit_loads` into ``u_unit`` with the current
-        factorisation; the volume of :meth:`_volume` (and :attr:`shut`) must be
-        of the solved state.
+        factorisation (``solved``: it is there already); the volume of
+        :meth:`_volume` (and :attr:`shut`) must be of the solved state.
         """
         solid = self.solid
-        a_form, ksp = solid.factorize()  # the one of the last solve: no new factorisation
-        solid.solve_load(ksp, a_form, solid.load_form(self.unit_loads()), solid.u_unit)
+        if not solved:
+            a_form, ksp = solid.factorize()  # the one of the last solve: no new factorisation
+            solid.solve_load(ksp, a_form, solid.load_form(self.unit_loads()), solid.u_unit)
         self._unit_jumps = solid.jumps(solid.u_unit)  # one evaluation for all three
         opening = -np.einsum("fi,fi->f", self._unit_jumps, solid.normals)  # facet_openings
         self.slope = self._slope(opening)
@@ -485,10 +486,17 @@ class _PumpedCavity:
         return out
 
     def resolve(self, loads: Loads) -> None:
-        """Solve at ``loads`` after a state change: new volume, slope and coupling."""
-        self.solid.solve(loads)
+        """Solve at ``loads`` after a state change: new volume, slope and coupling.
+
+        The unit load goes with the load in one solve, on the shut cracks as
+        they were; only if the load's solution shuts or parts one is it solved
+        again.
+        """
+        shut = self.shut
+        self.solid.solve(loads, self.unit_loads())
         self.volume = self._volume(loads)
-        self._linearise()
+        moved = not np.array_equal(shut, self.shut)
+        self._linearise(solved=not self.solid.comm.allreduce(moved, op=MPI.LOR))
 
     # ------------------------------------------------------------- balance
 

@@ -24,7 +24,7 @@ layer, so the reduced system is the same on any number of ranks.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import dolfinx
@@ -36,7 +36,13 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from hfcdem.solid.facets import InterfaceFacets
-from hfcdem.solvers import DIRECT_CHOLESKY, check_ksp, create_ksp, setup_factorisation
+from hfcdem.solvers import (
+    DIRECT_CHOLESKY,
+    check_ksp,
+    create_ksp,
+    setup_factorisation,
+    solve_together,
+)
 
 
 def glued_facet_set(
@@ -275,15 +281,35 @@ class ReducedSystem:
 
     def solve(self, ksp: PETSc.KSP, b: PETSc.Vec, target: dolfinx.fem.Function) -> None:
         """Solve the reduced system for the DG right-hand side ``b``; prolong into ``target``."""
-        b_red = self.clusters.reduce_vector(b)
-        b_red.setValues(self.held, np.zeros(len(self.held)))
-        b_red.assemble()
-        u_red = b_red.duplicate()
-        ksp.solve(b_red, u_red)
+        self.solve_many(ksp, [b], [target])
+
+    def solve_many(
+        self,
+        ksp: PETSc.KSP,
+        rhs: Sequence[PETSc.Vec],
+        targets: Sequence[dolfinx.fem.Function],
+    ) -> None:
+        """Solve for every DG right-hand side of ``rhs`` into ``targets``, together if direct."""
+        reduced = []
+        for b in rhs:
+            b_red = self.clusters.reduce_vector(b)
+            b_red.setValues(self.held, np.zeros(len(self.held)))
+            b_red.assemble()
+            reduced.append(b_red)
+        u_red = reduced[0].duplicate()
+        if len(reduced) > 1 and ksp.getType() == PETSc.KSP.Type.PREONLY:
+            solved = solve_together(ksp, reduced)
+            for i, target in enumerate(targets):
+                u_red.setArray(solved[:, i])
+                self.clusters.prolong(u_red, target)
+        else:
+            for b_red, target in zip(reduced, targets, strict=True):
+                ksp.solve(b_red, u_red)
+                check_ksp(ksp, "reduced CDEM solve", "a block may be held by no boundary condition")
+                self.clusters.prolong(u_red, target)
         check_ksp(ksp, "reduced CDEM solve", "a block may be held by no boundary condition")
-        self.clusters.prolong(u_red, target)
-        b_red.destroy()
-        u_red.destroy()
+        for vec in (*reduced, u_red):
+            vec.destroy()
 
 
 __all__ = ["ReducedSystem", "VertexClusters", "glued_facet_set"]
