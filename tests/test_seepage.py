@@ -440,7 +440,9 @@ def test_filling_conserves_mass_every_step():
     assert worst < 3e-13  # measured 7.1e-14
     assert abs(sp.content.sum() - start - total) / total < 3e-14  # measured 3.0e-15
     s = sp.saturation
-    assert 0.0 < s.min() and s.max() == 1.0 and np.all(s >= saturation - 1e-15)
+    # never emptier, to round-off: a joint the fluid has not reached keeps its saturation
+    # to 1.4e-15 with MUMPS (2.2e-16 with PETSc's own LU), 7 ulp of its q = Kw (S - 1)
+    assert 0.0 < s.min() and s.max() == 1.0 and np.all(s >= saturation - 3e-15)
     assert np.all(sp.pressure[s < 1.0] == 0.0) and sp.pressure.max() <= P0
 
 
