@@ -99,6 +99,11 @@ def main() -> None:
     ap.add_argument(
         "--duration", help="pump for this long instead of the scene's 120 s (e.g. '2 s')"
     )
+    ap.add_argument(
+        "--linear-solver",
+        choices=("auto", "direct", "iterative"),
+        help="the solid's linear solver instead of the scene's (auto: direct up to 600k unknowns)",
+    )
     args = ap.parse_args()
     comm = MPI.COMM_WORLD
     say = print if args.progress and comm.rank == 0 else None
@@ -111,7 +116,9 @@ def main() -> None:
                 path.write_text(scene_text(rung))
             comm.barrier()
             t0 = time.perf_counter()
-            over = {"injection.duration": args.duration} if args.duration else None
+            over = {"injection.duration": args.duration} if args.duration else {}
+            if args.linear_solver:
+                over["solver.linear_solver"] = args.linear_solver
             scene = load_scene(path, args.resolution, overrides=over)
             s = run_scene(scene, Path(tmp) / "out", force=True, say=say)
             wall = time.perf_counter() - t0

@@ -62,7 +62,7 @@ them so a run's record can print what was assumed.  Any invalid field raises
     strength_points = "vertices" # or "midpoint": where a spring's strength is checked
     break_tolerance = 0.01      # a step may overshoot the next break by this fraction
     linear_solver = "auto"      # "direct" (MUMPS LDL^T), "iterative" (CG + GAMG) or "auto":
-                                # direct up to 300k unknowns
+                                # direct up to 600k unknowns
     solid = "full"              # "full": DG springs on every interface of the zone (the
                                 # reference); "reduced": springs only in a band that grows,
                                 # continuous blocks elsewhere (DG1, direct; hfcdem.solid.band)

@@ -74,8 +74,11 @@ from hfcdem.solvers import (
     solve_together,
 )
 
-# solver="auto": direct (MUMPS) up to this many unknowns, CG + GAMG beyond
-AUTO_DIRECT_MAX_DOFS = 300_000
+# solver="auto": direct (MUMPS) up to this many unknowns, CG + GAMG beyond. No. 2's
+# default mesh (404,844) factorises in 4 GB for both ranks and back-substitutes in
+# 0.5 s, where a CG + GAMG solve to 1e-10 takes about a minute; the paper mesh
+# (1.2M) would need 22.7 GB (benchmarks/README.md)
+AUTO_DIRECT_MAX_DOFS = 600_000
 
 
 @dataclass(frozen=True)
@@ -160,7 +163,7 @@ class CDEMSolid:
 
         self.V = dolfinx.fem.functionspace(mesh, ("DG", degree, (gdim,)))
         if solver == "auto":
-            # MUMPS is robust for any alpha; past this size CG + GAMG wins on 2 cores
+            # MUMPS is robust for any alpha; past this size its memory outgrows the machine
             dofs = self.V.dofmap.index_map.size_global * gdim
             self.solver_kind = "direct" if dofs <= AUTO_DIRECT_MAX_DOFS else "iterative"
         self.u = dolfinx.fem.Function(self.V, name="displacement")

@@ -299,6 +299,7 @@ class ReducedSystem:
         u_red = reduced[0].duplicate()
         if len(reduced) > 1 and ksp.getType() == PETSc.KSP.Type.PREONLY:
             solved = solve_together(ksp, reduced)
+            check_ksp(ksp, "reduced CDEM solve", "a block may be held by no boundary condition")
             for i, target in enumerate(targets):
                 u_red.setArray(solved[:, i])
                 self.clusters.prolong(u_red, target)
@@ -307,7 +308,6 @@ class ReducedSystem:
                 ksp.solve(b_red, u_red)
                 check_ksp(ksp, "reduced CDEM solve", "a block may be held by no boundary condition")
                 self.clusters.prolong(u_red, target)
-        check_ksp(ksp, "reduced CDEM solve", "a block may be held by no boundary condition")
         for vec in (*reduced, u_red):
             vec.destroy()
 
