@@ -226,14 +226,23 @@ def solve_together(ksp: PETSc.KSP, rhs: Sequence[PETSc.Vec]) -> np.ndarray:
 
     Returns this rank's rows of the solutions, one column each (a copy).
     """
-    n_local, n = rhs[0].getLocalSize(), rhs[0].getSize()
-    sizes = ((n_local, n), (PETSc.DECIDE, len(rhs)))
-    B = PETSc.Mat().createDense(sizes, comm=rhs[0].getComm())
+    block = np.column_stack([b.getArray(readonly=True) for b in rhs])
+    return solve_columns(ksp, block)
+
+
+def solve_columns(ksp: PETSc.KSP, block: np.ndarray) -> np.ndarray:
+    """Solve ``K X = B`` for this rank's rows ``block`` of a dense ``B`` (collective).
+
+    One call of ``KSP.matSolve``: a direct solver reads its factor once for all
+    the columns.  Returns this rank's rows of ``X`` (a copy).
+    """
+    n_local = block.shape[0]
+    n = ksp.getComm().tompi4py().allreduce(n_local)
+    sizes = ((n_local, n), (PETSc.DECIDE, block.shape[1]))
+    B = PETSc.Mat().createDense(sizes, comm=ksp.getComm())
     B.setUp()
     X = B.duplicate()
-    columns = B.getDenseArray()  # this rank's rows, one column per right-hand side
-    for i, b in enumerate(rhs):
-        columns[:, i] = b.getArray(readonly=True)
+    B.getDenseArray()[:] = block
     B.assemble()
     ksp.matSolve(B, X)
     solved = np.array(X.getDenseArray(readonly=True))
@@ -256,5 +265,6 @@ __all__ = [
     "reason_name",
     "retry_factorisation",
     "setup_factorisation",
+    "solve_columns",
     "solve_together",
 ]

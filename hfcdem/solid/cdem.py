@@ -79,6 +79,12 @@ from hfcdem.solvers import (
 # 0.5 s, where a CG + GAMG solve to 1e-10 takes about a minute; the paper mesh
 # (1.2M) would need 22.7 GB (benchmarks/README.md)
 AUTO_DIRECT_MAX_DOFS = 600_000
+# a direct solver takes interface events as a low-rank correction of its factor for
+# up to this many changed unknowns (18 per 3D DG1 facet), and for no more than
+# LOW_RANK_BYTES of correction columns over all ranks; PETSc option
+# -hfcdem_cdem_low_rank_columns overrides (0: refactorise at every event)
+LOW_RANK_COLUMNS = 256
+LOW_RANK_BYTES = 1 << 30
 
 
 @dataclass(frozen=True)
@@ -155,6 +161,7 @@ class CDEMSolid:
         self.prefix = prefix
         self.solver_kind = solver
         self.petsc_options = dict(petsc_options or {})
+        low_rank = self.petsc_options.pop("low_rank_columns", None)
         tdim = mesh.topology.dim
         self.gdim = gdim = mesh.geometry.dim
         mesh.topology.create_connectivity(tdim - 1, tdim)
@@ -202,11 +209,20 @@ class CDEMSolid:
         # load forms of the current interface states and band, by their terms
         self._load_forms: dict[LoadTerms, LoadForm] = {}
         self._load_forms_stamp: tuple[np.ndarray, int] | None = None
+        if low_rank is None:
+            dofs = self.V.dofmap.index_map.size_global * gdim
+            low_rank = min(LOW_RANK_COLUMNS, LOW_RANK_BYTES // (8 * dofs))
+        if not isinstance(low_rank, int) or isinstance(low_rank, bool):
+            raise ValueError(f"low_rank_columns must be a whole number, got {low_rank!r}")
+        columns = PETSc.Options(prefix).getInt("low_rank_columns", low_rank)
+        if columns < 0:
+            raise ValueError(f"low_rank_columns must be 0 or more, got {columns}")
         self.operator = StiffnessOperator(
             self.comm,
             lambda: self.assemble_stiffness()[1],
             self.assemble_change,
             self._create_solver,
+            max_columns=columns,
         )
         self.solves = 0
         self.solve_seconds = 0.0

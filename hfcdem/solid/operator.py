@@ -6,6 +6,12 @@ operator adds the change of those facets, ``dK`` (reduced through ``P`` in the
 reduced mode), to the matrix it keeps.  The sparsity and the KSP stay, so MUMPS
 redoes only its numeric factorisation (no ordering, no symbolic analysis).
 
+With a direct solver and ``max_columns > 0`` an event does not even
+refactorise: the change joins a low-rank (Woodbury) correction of the kept
+factor (:mod:`hfcdem.solid.lowrank`) until ``max_columns`` unknowns have
+changed; then the changes are added to the factorised matrix and it is
+refactorised numerically.
+
 It assembles afresh when the structure changes (a new band in the reduced mode),
 when a numeric refactorisation fails, and every ``refresh_every`` updates, so
 round-off of the sums cannot build up.
@@ -20,6 +26,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from hfcdem.solid.lowrank import LowRankCorrection, corrected_solver
 from hfcdem.solvers import WORKSPACE_ERRORS, mumps_info
 
 Reduce = Callable[[PETSc.Mat, float], PETSc.Mat]
@@ -32,7 +39,7 @@ class StiffnessOperator:
     ``assemble_change(old, new)`` the change of the interfaces whose integral went
     from ``old`` to ``new`` (Dirichlet rows and columns zero); ``reduce(A,
     diagonal)`` (or None) maps a DG matrix to the solved one; ``create_solver(A)``
-    factorises it.
+    factorises it.  ``max_columns`` caps the low-rank correction (0: none).
     """
 
     def __init__(
@@ -42,19 +49,26 @@ class StiffnessOperator:
         assemble_change: Callable[[np.ndarray, np.ndarray], PETSc.Mat],
         create_solver: Callable[[PETSc.Mat], PETSc.KSP],
         refresh_every: int = 50,
+        max_columns: int = 0,
     ) -> None:
         self.comm = comm
         self._assemble = assemble
         self._assemble_change = assemble_change
         self._create_solver = create_solver
         self.refresh_every = refresh_every
-        self._A: PETSc.Mat | None = None
-        self._ksp: PETSc.KSP | None = None
+        self.max_columns = max_columns
+        self._A: PETSc.Mat | None = None  # the factorised matrix
+        self._ksp: PETSc.KSP | None = None  # its factorisation
+        # low-rank mode: the matrix with the changes since, the changes, their correction
+        self._current: PETSc.Mat | None = None
+        self._pending: list[PETSc.Mat] = []
+        self._correction: LowRankCorrection | None = None
+        self._solver: PETSc.KSP | None = None  # what solver() hands out
         self._values: np.ndarray | None = None
         self._key: Hashable = None
         self._updates = 0
-        self.counts = {"assembled": 0, "updated": 0, "unchanged": 0}
-        self.seconds = {"assemble": 0.0, "update": 0.0, "factorise": 0.0}
+        self.counts = {"assembled": 0, "updated": 0, "unchanged": 0, "low_rank": 0}
+        self.seconds = {"assemble": 0.0, "update": 0.0, "factorise": 0.0, "low_rank": 0.0}
 
     def solver(self, values: np.ndarray, key: Hashable, reduce: Reduce | None) -> PETSc.KSP:
         """Return the factorised KSP of the interfaces' integrals ``values`` (collective).
@@ -67,12 +81,14 @@ class StiffnessOperator:
             changed = int(np.count_nonzero(values != self._values))
             if self.comm.allreduce(changed, op=MPI.SUM) == 0:
                 self.counts["unchanged"] += 1
-                return self._ksp
+                assert self._solver is not None
+                return self._solver
             if self._updates < self.refresh_every and self._update(values, reduce):
-                return self._ksp
+                assert self._solver is not None
+                return self._solver
         self._fresh(values, key, reduce)
-        assert self._ksp is not None
-        return self._ksp
+        assert self._solver is not None
+        return self._solver
 
     def _fresh(self, values: np.ndarray, key: Hashable, reduce: Reduce | None) -> None:
         self.destroy()
@@ -82,23 +98,42 @@ class StiffnessOperator:
             A_dg, A = A, reduce(A, 1.0)
             A_dg.destroy()
         t1 = time.perf_counter()
-        self._ksp = self._create_solver(A)
+        self._ksp = self._solver = self._create_solver(A)
         self._A = A
+        if self.max_columns > 0 and mumps_info(self._ksp) is not None:
+            self._current = A.copy()
+            self._correction = LowRankCorrection(self._ksp, self.max_columns)
         self._values, self._key, self._updates = values, key, 0
         self.counts["assembled"] += 1
         self.seconds["assemble"] += t1 - t0
         self.seconds["factorise"] += time.perf_counter() - t1
 
     def _update(self, values: np.ndarray, reduce: Reduce | None) -> bool:
-        """Add the change to the kept matrix and refactorise numerically; False if that failed."""
+        """Take the change into the correction or refactorise numerically; False if that failed."""
         assert self._A is not None and self._ksp is not None and self._values is not None
         t0 = time.perf_counter()
         dK = self._assemble_change(self._values, values)
         if reduce is not None:
             dK_dg, dK = dK, reduce(dK, 0.0)
             dK_dg.destroy()
-        self._A.axpy(1.0, dK, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-        dK.destroy()
+        subset = PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN
+        if self._current is not None:
+            self._current.axpy(1.0, dK, structure=subset)
+        if self._correction is not None and self._correction.add(dK):
+            assert self._current is not None
+            self._pending.append(dK)
+            if self._solver is self._ksp:
+                self._solver = corrected_solver(self._correction, self._current)
+            self._values = values
+            self._updates += 1
+            self.counts["low_rank"] += 1
+            self.seconds["low_rank"] += time.perf_counter() - t0
+            return True
+        # the kept factor's matrix takes every change since, in the order _current did
+        for change in (*self._pending, dK):
+            self._A.axpy(1.0, change, structure=subset)
+            change.destroy()
+        self._pending = []
         t1 = time.perf_counter()
         self._ksp.setOperators(self._A)
         self._ksp.setUp()  # same sparsity: MUMPS keeps its analysis
@@ -107,17 +142,25 @@ class StiffnessOperator:
         self.seconds["factorise"] += time.perf_counter() - t1
         if codes and (min(codes) in WORKSPACE_ERRORS or min(codes) < 0):
             return False  # assembled afresh with more room by the caller
+        if self._correction is not None:
+            self._correction = LowRankCorrection(self._ksp, self.max_columns)
+        if self._solver is not self._ksp and self._solver is not None:
+            self._solver.destroy()
+        self._solver = self._ksp
         self._values = values
         self._updates += 1
         self.counts["updated"] += 1
         return True
 
     def destroy(self) -> None:
-        """Free the kept matrix and KSP."""
-        for obj in (self._ksp, self._A):
+        """Free the kept matrices and KSPs."""
+        if self._solver is not None and self._solver is not self._ksp:
+            self._solver.destroy()
+        for obj in (self._ksp, self._A, self._current, *self._pending):
             if obj is not None:
                 obj.destroy()
-        self._ksp, self._A, self._values = None, None, None
+        self._ksp, self._A, self._current, self._solver = None, None, None, None
+        self._pending, self._correction, self._values = [], None, None
 
 
 __all__ = ["StiffnessOperator"]
