@@ -84,7 +84,9 @@ def cost_split(path: Path) -> list[tuple[str, ...]]:
                 str(len(part)),
                 f"{total.get('solid_solves', 0):.0f}",
                 f"{total.get('factorisations', 0):.0f}",
+                f"{total.get('low_rank_events', 0):.0f}",
                 f"{total.get('factorise_s', 0):.0f}",
+                f"{total.get('low_rank_s', 0):.0f}",
                 f"{total.get('wall_s', 0):.0f}",
             )
         )
@@ -134,6 +136,7 @@ def main() -> None:
                 str(s.get("steps", "-")),
                 str(s.get("solid_solves", "-")),
                 str(s.get("factorisations", "-")),
+                str(s.get("low_rank_events", "-")),
                 str(s.get("rebalances", "-")),
                 f"{wall:.0f}",
                 str(s.get("stopped") or ""),
@@ -143,13 +146,14 @@ def main() -> None:
             print(f"{rung}: done in {wall:.0f} s: " + " | ".join(rows[-1][1:]), flush=True)
     if comm.rank == 0:
         head = ("rung", "breakdown MPa", "peak MPa", "first break MPa", "tensile / shear",
-                "steps", "solid solves", "factorisations", "re-balances", "wall s",
+                "steps", "solid solves", "factorisations", "low-rank events", "re-balances",
+                "wall s",
                 "stopped")  # fmt: skip
         _table(head, rows)
         if splits:
             print()
             head = ("rung", "steps", "count", "solid solves", "factorisations",
-                    "factorise s", "wall s")  # fmt: skip
+                    "low-rank events", "factorise s", "low-rank s", "wall s")  # fmt: skip
             _table(head, splits)
 
 

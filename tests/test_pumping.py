@@ -109,19 +109,21 @@ def test_a_run_that_ends_on_a_rising_pressure_has_no_breakdown(plate):
 
 
 def test_step_costs_add_up_to_the_run(plate):
-    """The per-step record sums to the run's totals; a step that breaks refactorises."""
+    """The per-step record sums to the run's totals; a step that breaks changes the solver."""
     run = _pump(plate, 1e-9)
     costs = np.array(run.costs)
     assert costs.shape == (run.steps, len(pumping_module.COST_COLUMNS))
-    t, _, broken, solves, factorisations, rebalances, seconds, wall = costs.T
+    t, _, broken, solves, factorisations, low_rank, rebalances, seconds, low_s, wall = costs.T
     assert np.array_equal(t, np.array(run.history)[:, 0])
     assert solves.sum() == run.solid_solves and factorisations.sum() == run.factorisations
+    assert low_rank.sum() == run.low_rank_events > 0
     assert rebalances.sum() == run.rebalances
     assert broken.sum() == run.tensile + run.shear - run.initial_failures
-    assert np.all(factorisations[broken > 0] >= 1) and np.all(solves >= 1)
+    # a break refactorises or joins the low-rank correction
+    assert np.all((factorisations + low_rank)[broken > 0] >= 1) and np.all(solves >= 1)
     # before the first break nothing changes the stiffness: no factorisation
-    assert factorisations[t < run.first_time].sum() == 0
-    assert np.all(seconds <= wall) and np.all(wall > 0.0)
+    assert (factorisations + low_rank)[t < run.first_time].sum() == 0
+    assert np.all(seconds + low_s <= wall) and np.all(wall > 0.0)
 
 
 @pytest.mark.mpi
@@ -132,6 +134,7 @@ def test_ranks_agree(plate):
     assert world.first_pressure == pytest.approx(alone.first_pressure, rel=1e-8)
     assert (world.tensile, world.shear) == (alone.tensile, alone.shear)
     assert world.factorisations == alone.factorisations
+    assert world.low_rank_events == alone.low_rank_events
     assert world.solid_solves == alone.solid_solves
     assert np.allclose(world.first_location, alone.first_location, atol=1e-12)
 

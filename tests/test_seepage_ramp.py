@@ -160,7 +160,9 @@ def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
     costs = (shared_tmp_path / "pumped" / "step_costs.csv").read_text().splitlines()
     assert costs[0].split(",") == list(COST_COLUMNS) and len(costs) == len(rows)
     factorisations = sum(int(float(r.split(",")[4])) for r in costs[1:])
-    assert factorisations == summary["factorisations"] > 0
+    low_rank = sum(int(float(r.split(",")[5])) for r in costs[1:])
+    assert factorisations == summary["factorisations"]
+    assert low_rank == summary["low_rank_events"] > 0
     # the joints over time (Fig. 14): the start and every 1 s (duration / 20) to 20 s
     frames = read_pvd(shared_tmp_path / "pumped" / "joints.pvd")
     assert len(frames) == 21 and frames[0][0] == 0.0

@@ -88,8 +88,10 @@ COST_COLUMNS = (
     "broken",
     "solid_solves",
     "factorisations",
+    "low_rank_events",
     "rebalances",
     "factorise_s",
+    "low_rank_s",
     "wall_s",
 )
 
@@ -137,10 +139,12 @@ class PumpingResult:
     the fluid took (:mod:`hfcdem.solid.fragments`); ``rebalances``: balances
     repeated because the solved volume was not the balanced one;
     ``solid_solves``: the solid's solves during pumping; ``factorisations``:
-    the stiffness factorisations during pumping (fresh or numeric only, one per
-    change of the interfaces' states); ``costs`` rows, one per step, of
-    :data:`COST_COLUMNS`: where the run spent its solves and seconds (the
-    seconds are each rank's own, the counts the same on every rank).
+    the stiffness factorisations during pumping (fresh or numeric only);
+    ``low_rank_events``: changes of the interfaces' states taken as a low-rank
+    correction of the kept factor instead (:mod:`hfcdem.solid.lowrank`);
+    ``costs`` rows, one per step, of :data:`COST_COLUMNS`: where the run spent
+    its solves and seconds (the seconds are each rank's own, the counts the
+    same on every rank).
     """
 
     first_pressure: float | None
@@ -167,6 +171,7 @@ class PumpingResult:
     rebalances: int = 0
     solid_solves: int = 0
     factorisations: int = 0
+    low_rank_events: int = 0
     costs: list[tuple[float, ...]] = field(default_factory=list)
 
 
@@ -283,10 +288,18 @@ class _PumpedCavity:
 
     # ------------------------------------------------------------- network
 
-    def _factorisations(self) -> tuple[int, float]:
-        """Count the solid's factorisations so far (fresh and numeric) and their seconds."""
+    def _factorisations(self) -> tuple[int, int, float, float]:
+        """Count the solid's factorisations (fresh and numeric) and low-rank events so far.
+
+        Returns the two counts and their seconds.
+        """
         counts, seconds = self.solid.operator.counts, self.solid.operator.seconds
-        return counts["assembled"] + counts["updated"], seconds["factorise"]
+        return (
+            counts["assembled"] + counts["updated"],
+            counts["low_rank"],
+            seconds["factorise"],
+            seconds["low_rank"],
+        )
 
     def _joined_cracks(self) -> np.ndarray:
         """Per local facet: broken and joined to the cavity through broken facets.
@@ -695,11 +708,11 @@ class _PumpedCavity:
                 stopped, limit = str(stop), True
                 break
             t, n = t + dt, n + 1
-            factorisations, seconds = self._factorisations()
+            events = self._factorisations()
             costs.append(
-                (t, dt, broken, solid.solves - before[0], factorisations - before[2],
-                 self.rebalances - before[1], seconds - before[3],
-                 time.perf_counter() - before[4])
+                (t, dt, broken, solid.solves - before[0], events[0] - before[2],
+                 events[1] - before[3], self.rebalances - before[1], events[2] - before[4],
+                 events[3] - before[5], time.perf_counter() - before[6])
             )  # fmt: skip
             if frames is not None:
                 frames(t, *self.fields())
@@ -757,6 +770,7 @@ class _PumpedCavity:
             rebalances=self.rebalances,
             solid_solves=solid.solves - self.solves_before,
             factorisations=self._factorisations()[0] - self.factorisations_before[0],
+            low_rank_events=self._factorisations()[1] - self.factorisations_before[1],
             costs=costs,
         )
 

@@ -294,6 +294,7 @@ def _run_pumped(
         "rebalances": result.rebalances,
         "solid_solves": result.solid_solves,
         "factorisations": result.factorisations,
+        "low_rank_events": result.low_rank_events,
         "debris_cells": result.debris_cells,
         "steps": result.steps,
         "stopped": result.stopped,
