@@ -230,20 +230,25 @@ def solve_together(ksp: PETSc.KSP, rhs: Sequence[PETSc.Vec]) -> np.ndarray:
     return solve_columns(ksp, block)
 
 
+def dense_rows(comm: PETSc.Comm, block: np.ndarray, n: int) -> PETSc.Mat:
+    """Return an assembled dense ``n x k`` matrix with this rank's rows ``block`` (collective)."""
+    sizes = ((block.shape[0], n), (PETSc.DECIDE, block.shape[1]))
+    M = PETSc.Mat().createDense(sizes, comm=comm)
+    M.setUp()
+    M.getDenseArray()[:] = block
+    M.assemble()
+    return M
+
+
 def solve_columns(ksp: PETSc.KSP, block: np.ndarray) -> np.ndarray:
     """Solve ``K X = B`` for this rank's rows ``block`` of a dense ``B`` (collective).
 
     One call of ``KSP.matSolve``: a direct solver reads its factor once for all
     the columns.  Returns this rank's rows of ``X`` (a copy).
     """
-    n_local = block.shape[0]
-    n = ksp.getComm().tompi4py().allreduce(n_local)
-    sizes = ((n_local, n), (PETSc.DECIDE, block.shape[1]))
-    B = PETSc.Mat().createDense(sizes, comm=ksp.getComm())
-    B.setUp()
+    n = ksp.getOperators()[0].getSize()[0]
+    B = dense_rows(ksp.getComm(), block, n)
     X = B.duplicate()
-    B.getDenseArray()[:] = block
-    B.assemble()
     ksp.matSolve(B, X)
     solved = np.array(X.getDenseArray(readonly=True))
     B.destroy()
@@ -260,6 +265,7 @@ __all__ = [
     "ValidityLimit",
     "check_ksp",
     "create_ksp",
+    "dense_rows",
     "mumps_info",
     "petsc_options",
     "reason_name",

@@ -10,9 +10,9 @@ change.  With ``Z = K0^-1 E`` and ``S = E^T Z``,
 so the factor of ``K0`` serves the solves after any number of events: an
 event costs the new columns of ``Z`` (one MUMPS solve with several right-hand
 sides) instead of a numeric refactorisation, and a solve costs a second
-back-substitution (one step of iterative refinement) and ``n x r`` products.  At No. 2's default mesh a
-numeric refactorisation takes 15-19 s, the columns of one facet about 1 s
-(benchmarks/README.md).
+back-substitution (one step of iterative refinement) and ``n x r`` products.
+At No. 2's default mesh a numeric refactorisation takes 15-19 s, the columns
+of one facet about 1 s (benchmarks/README.md).
 
 :class:`LowRankCorrection` keeps ``E``, ``Z``, ``S`` and ``D``;
 :func:`corrected_solver` wraps it in a KSP (``preonly`` with a Python PC), so
@@ -25,7 +25,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from hfcdem.solvers import check_ksp, solve_columns
+from hfcdem.solvers import check_ksp, dense_rows, solve_columns
 
 # columns of Z solved together: MUMPS's dense right-hand side is n x this
 _COLUMN_BATCH = 32
@@ -109,10 +109,10 @@ class _CorrectedPC:
 
     The correction's own round-off grows with the change (a broken facet drops a
     penalty stiffness of ``alpha E / h``): 1e-12 of the solution on a small
-    block, where a pumped run's volume balance needs 3e-13.  One step of iterative refinement on the changed matrix
-    (``operator``) takes it to about 1e-13 on the small block, where more
-    steps gain nothing (measured: the conditioning's limit, a direct solve's
-    own).
+    block, where a pumped run's volume balance needs 3e-13.  One step of
+    iterative refinement on the changed matrix (``operator``) takes it to about
+    1e-13 on the small block, where more steps gain nothing (measured: the
+    conditioning's limit, a direct solve's own).
     """
 
     def __init__(self, correction: LowRankCorrection, operator: PETSc.Mat) -> None:
@@ -121,12 +121,7 @@ class _CorrectedPC:
 
     def _times(self, Y: np.ndarray) -> np.ndarray:
         """``K Y`` for this rank's rows ``Y``."""
-        n_local = Y.shape[0]
-        sizes = ((n_local, self.operator.getSize()[1]), (PETSc.DECIDE, Y.shape[1]))
-        M = PETSc.Mat().createDense(sizes, comm=self.operator.getComm())
-        M.setUp()
-        M.getDenseArray()[:] = Y
-        M.assemble()
+        M = dense_rows(self.operator.getComm(), Y, self.operator.getSize()[1])
         KY = self.operator.matMult(M)
         out = np.array(KY.getDenseArray(readonly=True))
         M.destroy()
