@@ -39,7 +39,13 @@ SHAPES = {
     "4-1": 56.97,
     "4-2": 68.75,
 }
-SHAPE_FRACTURE_DEGREE = {"1-2": 0.31e-3, "4-1": 0.56e-3}
+SHAPE_FRACTURE_DEGREE = {"1-2": 0.31e-3, "4-1": 0.56e-3}  # sec. 5.2 text (0.31 and 0.56 per mille)
+# pairs that change one parameter of No. 2's shape (Tables 7-8): the paper finds the lower
+# breakdown of each pair with the higher fracture degree (sec. 5.2, Fig. 21)
+SHAPE_SINGLE_CHANGES = (("1-1", "1-2"), ("2-1", "2-2"), ("3-1", "3-2"), ("4-1", "4-2"))
+# sec. 4.4, Fig. 19: the charges with the largest and the smallest fracture degree; the
+# degree rises as the breakdown falls
+CHARGE_DEGREE_EXTREMES = ("no2", "no3")
 
 # the orderings the paper draws from these numbers: (lower, higher) pairs
 SHAPE_ORDERINGS = (
@@ -63,6 +69,7 @@ DEM_LBM_WEIBULL_M2_SHEAR = (32, 78)
 
 __all__ = [
     "CHARGES",
+    "CHARGE_DEGREE_EXTREMES",
     "CHARGE_NAMES",
     "DEM_LBM_WEIBULL_M2_SHEAR",
     "FIELD_FIRST_CRACK_S",
@@ -76,4 +83,5 @@ __all__ = [
     "SHAPES",
     "SHAPE_FRACTURE_DEGREE",
     "SHAPE_ORDERINGS",
+    "SHAPE_SINGLE_CHANGES",
 ]

@@ -7,9 +7,16 @@ import math
 import pytest
 from mpi4py import MPI
 
+from hfcdem import references
 from hfcdem.cli import main
 from hfcdem.reproduce.cases import CASES, select_cases
-from hfcdem.reproduce.compare import CaseResult, Comparison, trend
+from hfcdem.reproduce.compare import (
+    CaseResult,
+    Comparison,
+    charge_degrees,
+    shape_degrees,
+    trend,
+)
 from hfcdem.reproduce.report import BEGIN, END, summary_table, update_readme
 from hfcdem.reproduce.runner import CaseRecord, case_status, run_reproduction
 
@@ -143,6 +150,39 @@ def test_comparison_rows_judge_gaps_and_trends(tmp_path):
     rows = ({"x": 1, "breakdown_pressure_MPa": 10.0}, {"x": 2, "breakdown_pressure_MPa": None})
     (lonely,) = trend("b", "rises", True, 1.0, "")(CaseResult(tmp_path, (), rows=rows))
     assert lonely.met is False and "fewer than two" in lonely.note
+
+
+def _study(tmp_path, peaks, degrees):
+    rows = [
+        {"value": k, "peak_pressure_MPa": peaks[k], "fracture_degree": degrees.get(k)}
+        for k in peaks
+    ]
+    return CaseResult(tmp_path, (), rows=tuple(rows))
+
+
+def test_fracture_degrees_are_judged_by_the_papers_orderings(tmp_path):
+    """Fig. 19 and 21: which charge fractures most, and the lower breakdown the higher degree."""
+    peaks = references.CHARGES  # No. 2 < No. 4 < No. 1 < No. 3
+    as_paper = {"no2": 4e-4, "no4": 3e-4, "no1": 2e-4, "no3": 1e-4}
+    extremes, pairs = charge_degrees(_study(tmp_path, peaks, as_paper))
+    assert extremes.met and pairs.met and pairs.ours_text == "6 of 6 pairs of charges"
+    swapped = as_paper | {"no2": 1e-4, "no3": 4e-4}
+    extremes, pairs = charge_degrees(_study(tmp_path, peaks, swapped))
+    assert extremes.met is False and extremes.ours_text.startswith("No. 3 and No. 2")
+    assert pairs.met is False and pairs.ours == 1  # only No. 4 against No. 1 agrees
+    assert charge_degrees(_study(tmp_path, peaks, {"no1": 1e-4})) == []  # one degree: no rows
+
+    shapes = dict(references.SHAPES)
+    degrees = {"1-1": 2e-4, "2-1": 5e-4, "2-2": 2e-4, "3-1": 5e-4, "3-2": 2e-4, "4-2": 2e-4}
+    degrees |= references.SHAPE_FRACTURE_DEGREE
+    d12, d41, single, both = shape_degrees(_study(tmp_path, shapes, degrees))
+    assert d12.gap == pytest.approx(0.0) and d12.unit == "%" and d12.met is None  # listed only
+    assert d41.ours == pytest.approx(0.056)
+    assert single.met and single.ours == 4 and both.met
+    degrees["4-2"] = 9e-4  # the shorter tunnel now fractures more, though it breaks higher
+    rows = shape_degrees(_study(tmp_path, shapes, degrees | {"no2": None}))
+    assert rows[2].met is False and rows[2].ours_text.startswith("3 of 4 pairs")
+    assert rows[3].met  # 1-2 and 4-1 unchanged
 
 
 @pytest.mark.serial

@@ -312,12 +312,110 @@ def _orderings(r: CaseResult, pairs: Sequence[tuple[str, str, str]]) -> list[Com
 
 
 def four_charges(r: CaseResult) -> list[Comparison]:
-    """Each charge's peak against the paper's, and the lowest-highest ordering."""
+    """Each charge's peak against the paper's, the orderings, and the fracture degrees."""
     rows = _peak_rows(
         references.CHARGES, "No.", "the paper's CDEM (Fig. 15)", ("no1", "no3", "no4")
     )(r)
     order = (("no2", "no3", "No. 2 breaks below No. 3 (lowest and highest)"),)
-    return rows + _orderings(r, order) + _spread(r, references.CHARGES)
+    return rows + _orderings(r, order) + _spread(r, references.CHARGES) + charge_degrees(r)
+
+
+#: why a fracture degree is the paper's own choice (its value is listed, not judged)
+_DEGREE_NOTE = (
+    "the paper divides by every contact of its model, we by the interfaces of the "
+    "fracturable zone; failures to the end of the run"
+)
+
+
+def _degrees(r: CaseResult) -> dict[str, tuple[float, float]]:
+    """Peak pressure (MPa, the paper's breakdown) and fracture degree of each case with both."""
+    out = {}
+    for row in r.rows:
+        peak, degree = row.get("peak_pressure_MPa"), row.get("fracture_degree")
+        if isinstance(peak, int | float) and isinstance(degree, int | float):
+            if math.isfinite(peak) and math.isfinite(degree):
+                out[str(row["value"])] = (float(peak), float(degree))
+    return out
+
+
+def _shown(name: str) -> str:
+    return f"No. {name[2:]}" if name.startswith("no") else name
+
+
+def _degree_list(values: Mapping[str, tuple[float, float]]) -> str:
+    return ", ".join(f"{_shown(k)} {100 * d:.3g} %" for k, (_, d) in values.items())
+
+
+def _against_breakdown(values: Mapping[str, tuple[float, float]]) -> tuple[int, int]:
+    """Pairs whose lower breakdown has the higher fracture degree, of the pairs compared."""
+    pairs = [(a, b) for a, b in itertools.combinations(values.values(), 2) if a[0] != b[0]]
+    agree = sum((a[0] < b[0]) == (a[1] > b[1]) for a, b in pairs)
+    return agree, len(pairs)
+
+
+def charge_degrees(r: CaseResult) -> list[Comparison]:
+    """Fracture degree of the four charges against their breakdown (the paper's Fig. 19).
+
+    The paper's figure gives no numbers; its text says which charge has the
+    largest and the smallest degree, and that the degree rises as the
+    breakdown falls.  Both are judged as orderings.
+    """
+    values = _degrees(r)
+    if len(values) < 2:
+        return []
+    largest, smallest = references.CHARGE_DEGREE_EXTREMES
+    top = max(values, key=lambda k: values[k][1])
+    low = min(values, key=lambda k: values[k][1])
+    agree, count = _against_breakdown(values)
+    source = "the paper's Fig. 19 and sec. 4.4"
+    return [
+        Comparison("fracture degree: largest and smallest", None,
+                   ours_text=f"{_shown(top)} and {_shown(low)} ({_degree_list(values)})",
+                   reference_text=f"{_shown(largest)} and {_shown(smallest)}",
+                   agrees=(top, low) == (largest, smallest), source=source, note=_DEGREE_NOTE),
+        Comparison("the lower the breakdown, the higher the fracture degree", agree,
+                   ours_text=f"{agree} of {count} pairs of charges",
+                   reference_text="every charge", agrees=agree == count, source=source),
+    ]  # fmt: skip
+
+
+def shape_degrees(r: CaseResult) -> list[Comparison]:
+    """Fracture degrees of the shape study against the paper's (sec. 5.2, Fig. 21).
+
+    Its two printed degrees are listed (not judged: the denominators differ);
+    the orderings it draws are judged: within each single change of shape, the
+    lower breakdown goes with the higher degree, and the large cylinder (1-2)
+    is below the longer tunnel (4-1) in both.
+    """
+    values = _degrees(r)
+    source = "the paper's Fig. 21 and sec. 5.2"
+    out = [
+        Comparison(f"fracture degree, model {name}", 100 * values[name][1], 100 * ref, "%",
+                   source, note=_DEGREE_NOTE)
+        for name, ref in references.SHAPE_FRACTURE_DEGREE.items() if name in values
+    ]  # fmt: skip
+    pairs = [(a, b) for a, b in references.SHAPE_SINGLE_CHANGES if a in values and b in values]
+    if pairs:
+        agree = [(values[a][0] < values[b][0]) == (values[a][1] > values[b][1]) for a, b in pairs]
+        detail = "; ".join(
+            f"{a}/{b}: {values[a][0]:.2f}/{values[b][0]:.2f} MPa, "
+            f"{100 * values[a][1]:.3g}/{100 * values[b][1]:.3g} %"
+            for a, b in pairs
+        )
+        out.append(
+            Comparison("one change of shape: the lower breakdown, the higher degree",
+                       sum(agree), ours_text=f"{sum(agree)} of {len(agree)} pairs ({detail})",
+                       reference_text="every pair", agrees=all(agree), source=source)
+        )  # fmt: skip
+    if "1-2" in values and "4-1" in values:
+        (p12, d12), (p41, d41) = values["1-2"], values["4-1"]
+        out.append(
+            Comparison("model 1-2 below 4-1 in breakdown and fracture degree", None,
+                       ours_text=f"{p12:.2f} vs {p41:.2f} MPa, {100 * d12:.3g} vs "
+                       f"{100 * d41:.3g} %", reference_text="53.86 vs 56.97 MPa, 0.031 vs 0.056 %",
+                       agrees=p12 < p41 and d12 < d41, source=source)
+        )  # fmt: skip
+    return out
 
 
 def _spread(r: CaseResult, values: Mapping[str, float]) -> list[Comparison]:
@@ -335,7 +433,8 @@ def _spread(r: CaseResult, values: Mapping[str, float]) -> list[Comparison]:
 def shape_study(r: CaseResult) -> list[Comparison]:
     """Each model's peak against the paper's, and the orderings the paper draws."""
     rows = _peak_rows(references.SHAPES, "model", "the paper's CDEM (Fig. 21)")(r)
-    return rows + _orderings(r, references.SHAPE_ORDERINGS) + _spread(r, references.SHAPES)
+    rows += _orderings(r, references.SHAPE_ORDERINGS) + _spread(r, references.SHAPES)
+    return rows + shape_degrees(r)
 
 
 def peak_against(
@@ -375,12 +474,14 @@ __all__ = [
     "CaseResult",
     "Comparison",
     "borehole_limit",
+    "charge_degrees",
     "four_charges",
     "griffith",
     "kgd",
     "lab_specimen",
     "paper_trend",
     "peak_against",
+    "shape_degrees",
     "shape_study",
     "sneddon",
     "trend",
