@@ -14,6 +14,7 @@ from hfcdem.reproduce.compare import (
     CaseResult,
     Comparison,
     charge_degrees,
+    first_cracks,
     shape_degrees,
     trend,
 )
@@ -183,6 +184,20 @@ def test_fracture_degrees_are_judged_by_the_papers_orderings(tmp_path):
     rows = shape_degrees(_study(tmp_path, shapes, degrees | {"no2": None}))
     assert rows[2].met is False and rows[2].ours_text.startswith("3 of 4 pairs")
     assert rows[3].met  # 1-2 and 4-1 unchanged
+
+
+def test_first_cracks_of_the_four_charges_against_the_root(tmp_path):
+    crack = [("no1", "far end", 0.157), ("no2", "root", 0.041), ("no3", None, None)]
+    rows = tuple(
+        {"value": v, "first_crack": {"place": p, "distance_from_wellbore_wall_m": d}}
+        for v, p, d in crack
+    )
+    (row,) = first_cracks(CaseResult(tmp_path, (), rows=rows))
+    assert row.met is False and row.ours == 1
+    assert row.ours_text == "1 of 2: No. 1 far end (157 mm), No. 2 root (41 mm)"
+    (row,) = first_cracks(CaseResult(tmp_path, (), rows=rows[1:]))
+    assert row.met
+    assert first_cracks(CaseResult(tmp_path, (), rows=({"value": "no1"},))) == []
 
 
 @pytest.mark.serial

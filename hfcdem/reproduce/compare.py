@@ -312,12 +312,34 @@ def _orderings(r: CaseResult, pairs: Sequence[tuple[str, str, str]]) -> list[Com
 
 
 def four_charges(r: CaseResult) -> list[Comparison]:
-    """Each charge's peak against the paper's, the orderings, and the fracture degrees."""
+    """Each charge's peak against the paper's, orderings, first cracks and fracture degrees."""
     rows = _peak_rows(
         references.CHARGES, "No.", "the paper's CDEM (Fig. 15)", ("no1", "no3", "no4")
     )(r)
     order = (("no2", "no3", "No. 2 breaks below No. 3 (lowest and highest)"),)
-    return rows + _orderings(r, order) + _spread(r, references.CHARGES) + charge_degrees(r)
+    rows += _orderings(r, order) + _spread(r, references.CHARGES) + first_cracks(r)
+    return rows + charge_degrees(r)
+
+
+def first_cracks(r: CaseResult) -> list[Comparison]:
+    """Where each case's first crack is, against the paper's root (Fig. 16), as one row."""
+    places = []
+    for row in r.rows:
+        first = row.get("first_crack") or {}
+        where, place = first.get("distance_from_wellbore_wall_m"), first.get("place")
+        if where is not None and place is not None:
+            places.append((_shown(str(row["value"])), str(place), float(where)))
+    if not places:
+        return []
+    roots = sum(place == "root" for _, place, _ in places)
+    listed = ", ".join(f"{name} {place} ({1e3 * where:.0f} mm)" for name, place, where in places)
+    return [
+        Comparison("first crack at the root of every tunnel", roots,
+                   ours_text=f"{roots} of {len(places)}: {listed}", reference_text="every one",
+                   agrees=roots == len(places), source="the paper's Fig. 16",
+                   note="distance from the wellbore wall; the tunnel's thirds: root, middle, "
+                   "far end")
+    ]  # fmt: skip
 
 
 #: why a fracture degree is the paper's own choice (its value is listed, not judged)
@@ -475,6 +497,7 @@ __all__ = [
     "Comparison",
     "borehole_limit",
     "charge_degrees",
+    "first_cracks",
     "four_charges",
     "griffith",
     "kgd",
