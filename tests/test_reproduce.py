@@ -14,6 +14,7 @@ from hfcdem.reproduce.compare import (
     CaseResult,
     Comparison,
     charge_degrees,
+    failure_modes,
     first_cracks,
     shape_degrees,
     trend,
@@ -198,6 +199,15 @@ def test_first_cracks_of_the_four_charges_against_the_root(tmp_path):
     (row,) = first_cracks(CaseResult(tmp_path, (), rows=rows[1:]))
     assert row.met
     assert first_cracks(CaseResult(tmp_path, (), rows=({"value": "no1"},))) == []
+
+
+def test_failure_modes_of_the_four_charges_are_mostly_tensile(tmp_path):
+    rows = ({"value": "no1", "tensile_failures": 151, "shear_failures": 9},)
+    (row,) = failure_modes(CaseResult(tmp_path, (), rows=rows))
+    assert row.met and row.ours_text == "No. 1 151 / 9 (tensile / shear interfaces)"
+    rows += ({"value": "no2", "tensile_failures": 8, "shear_failures": 8},)
+    assert failure_modes(CaseResult(tmp_path, (), rows=rows))[0].met is False
+    assert failure_modes(CaseResult(tmp_path, (), rows=({"value": "no3"},))) == []
 
 
 @pytest.mark.serial

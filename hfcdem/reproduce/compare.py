@@ -318,7 +318,26 @@ def four_charges(r: CaseResult) -> list[Comparison]:
     )(r)
     order = (("no2", "no3", "No. 2 breaks below No. 3 (lowest and highest)"),)
     rows += _orderings(r, order) + _spread(r, references.CHARGES) + first_cracks(r)
-    return rows + charge_degrees(r)
+    return rows + failure_modes(r) + charge_degrees(r)
+
+
+def failure_modes(r: CaseResult) -> list[Comparison]:
+    """Whether every case failed mostly in tension, as the paper's Fig. 17 (one row)."""
+    counts: list[tuple[str, int, int]] = []
+    for row in r.rows:
+        t, s = row.get("tensile_failures"), row.get("shear_failures")
+        if t is not None and s is not None:
+            counts.append((_shown(str(row["value"])), int(t), int(s)))
+    if not counts:
+        return []
+    tensile = all(t > s for _, t, s in counts)
+    return [
+        Comparison("failure mostly tensile", None,
+                   ours_text=", ".join(f"{n} {t} / {s}" for n, t, s in counts)
+                   + " (tensile / shear interfaces)",
+                   reference_text="primarily tensile, every charge", agrees=tensile,
+                   source="the paper's Fig. 17 and sec. 4.4")
+    ]  # fmt: skip
 
 
 def first_cracks(r: CaseResult) -> list[Comparison]:
@@ -497,6 +516,7 @@ __all__ = [
     "Comparison",
     "borehole_limit",
     "charge_degrees",
+    "failure_modes",
     "first_cracks",
     "four_charges",
     "griffith",
