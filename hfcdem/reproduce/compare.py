@@ -384,7 +384,7 @@ def _shown(name: str) -> str:
 
 
 def _degree_list(values: Mapping[str, tuple[float, float]]) -> str:
-    return ", ".join(f"{_shown(k)} {100 * d:.3g} %" for k, (_, d) in values.items())
+    return ", ".join(f"{_shown(k)} {100 * d:.2f} %" for k, (_, d) in values.items())
 
 
 def _against_breakdown(values: Mapping[str, tuple[float, float]]) -> tuple[int, int]:
@@ -440,7 +440,7 @@ def shape_degrees(r: CaseResult) -> list[Comparison]:
         agree = [(values[a][0] < values[b][0]) == (values[a][1] > values[b][1]) for a, b in pairs]
         detail = "; ".join(
             f"{a}/{b}: {values[a][0]:.2f}/{values[b][0]:.2f} MPa, "
-            f"{100 * values[a][1]:.3g}/{100 * values[b][1]:.3g} %"
+            f"{100 * values[a][1]:.2f}/{100 * values[b][1]:.2f} %"
             for a, b in pairs
         )
         out.append(
@@ -452,8 +452,8 @@ def shape_degrees(r: CaseResult) -> list[Comparison]:
         (p12, d12), (p41, d41) = values["1-2"], values["4-1"]
         out.append(
             Comparison("model 1-2 below 4-1 in breakdown and fracture degree", None,
-                       ours_text=f"{p12:.2f} vs {p41:.2f} MPa, {100 * d12:.3g} vs "
-                       f"{100 * d41:.3g} %", reference_text="53.86 vs 56.97 MPa, 0.031 vs 0.056 %",
+                       ours_text=f"{p12:.2f} vs {p41:.2f} MPa, {100 * d12:.2f} vs "
+                       f"{100 * d41:.2f} %", reference_text="53.86 vs 56.97 MPa, 0.031 vs 0.056 %",
                        agrees=p12 < p41 and d12 < d41, source=source)
         )  # fmt: skip
     return out
