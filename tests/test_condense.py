@@ -54,6 +54,22 @@ def test_superposed_columns_equal_a_direct_solve():
     np.testing.assert_allclose(u.x.array, solid.u.x.array, atol=1e-9 * scale)
 
 
+@pytest.mark.parametrize("batch", [1, 2, 3])
+def test_columns_do_not_depend_on_how_the_solves_are_batched(monkeypatch, batch):
+    """Base and 3 columns: 4 right-hand sides, solved in batches of 1, 2 or 3 (the rest last)."""
+    *_, base, columns = _condensed()
+    import hfcdem.coupling.condense as condense_module
+
+    monkeypatch.setattr(condense_module, "SOLVE_BATCH", batch)
+    *_, base_b, columns_b = _condensed()
+    assert len(columns_b) == 3
+    for a, b in zip([base, *columns], [base_b, *columns_b], strict=True):
+        assert np.abs(b.x.array).max() > 0.0
+        np.testing.assert_allclose(
+            b.x.array, a.x.array, rtol=0, atol=1e-12 * np.abs(a.x.array).max()
+        )
+
+
 def test_void_volumes_are_linear_with_a_symmetric_compliance():
     solid, network, _, base, columns = _condensed()
     _, h, hc, _, closure = network_volumes(solid, network, (base, columns), 0.0, None)

@@ -171,7 +171,9 @@ def condense(
     """
     a_form, ksp = solid.factorize()
     base = dolfinx.fem.Function(solid.V)
-    rhs = [solid.assemble_load(a_form, solid.load_form(Loads(cavity=dict.fromkeys(cavity, 0.0))))]
+    zero = solid.load_form(Loads(cavity=dict.fromkeys(cavity, 0.0)))
+    # (right-hand side, solution) pairs not solved yet: MUMPS reads its factor once per batch
+    pending = [(solid.assemble_load(a_form, zero), base)]
     v, nrm = ufl.TestFunction(solid.V), ufl.FacetNormal(solid.mesh)
     # per-facet values through a CR function (exact at the single quadrature point)
     cr = solid.facet_function(np.zeros(solid.num_facets))
@@ -190,18 +192,21 @@ def condense(
     L_form = dolfinx.fem.form(L)
     cr_dofs = solid.facet_dofs()
     columns = [dolfinx.fem.Function(solid.V) for _ in range(size)]
-    targets = [base, *columns]
-    for g in range(size):
+
+    def solve_pending() -> None:
+        solid.solve_assembled(ksp, [b for b, _ in pending], [x for _, x in pending])
+        pending.clear()
+
+    for g, column in enumerate(columns):
         cr.x.array[:] = 0.0
         cr.x.array[cr_dofs] = ((group == g) & is_open).astype(float)
         cr.x.scatter_forward()
         c_cav.value = 1.0 if g == 0 else 0.0
-        rhs.append(solid.assemble_load(a_form, L_form))
-        if len(rhs) == SOLVE_BATCH:  # MUMPS reads its factor once per batch
-            solid.solve_assembled(ksp, rhs, targets[g + 2 - len(rhs) : g + 2])
-            rhs = []
-    if rhs:
-        solid.solve_assembled(ksp, rhs, targets[size + 1 - len(rhs) :])
+        pending.append((solid.assemble_load(a_form, L_form), column))
+        if len(pending) == SOLVE_BATCH:
+            solve_pending()
+    if pending:
+        solve_pending()
     solid.solves += 1
     return base, columns
 
