@@ -11,11 +11,13 @@ from hfcdem import references
 from hfcdem.cli import main
 from hfcdem.reproduce.cases import CASES, select_cases
 from hfcdem.reproduce.compare import (
+    DEGREE_FIGURE,
     CaseResult,
     Comparison,
     charge_degrees,
     failure_modes,
     first_cracks,
+    four_charges,
     shape_degrees,
     trend,
 )
@@ -173,6 +175,9 @@ def test_fracture_degrees_are_judged_by_the_papers_orderings(tmp_path):
     assert extremes.met is False and extremes.ours_text.startswith("No. 3 and No. 2")
     assert pairs.met is False and pairs.ours == 1  # only No. 4 against No. 1 agrees
     assert charge_degrees(_study(tmp_path, peaks, {"no1": 1e-4})) == []  # one degree: no rows
+    assert not (tmp_path / DEGREE_FIGURE).exists()
+    rows = four_charges(_study(tmp_path, peaks, as_paper))  # draws the degrees too
+    assert (tmp_path / DEGREE_FIGURE).stat().st_size > 0 and len(rows) >= 6
 
     shapes = dict(references.SHAPES)
     degrees = {"1-1": 2e-4, "2-1": 5e-4, "2-2": 2e-4, "3-1": 5e-4, "3-2": 2e-4, "4-2": 2e-4}

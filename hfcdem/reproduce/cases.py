@@ -17,6 +17,7 @@ from typing import Any
 
 from hfcdem import references
 from hfcdem.reproduce.compare import (
+    DEGREE_FIGURE,
     CaseResult,
     Comparison,
     borehole_limit,
@@ -356,7 +357,7 @@ CASES: tuple[Case, ...] = (
         {"full": Tier("coarse", estimate_s=900)},
         four_charges,
         discretisation="as No. 2 (coarse)",
-        figures=("study.png",),
+        figures=("study.png", DEGREE_FIGURE),
     ),
     Case(
         "shape_study",
@@ -367,7 +368,7 @@ CASES: tuple[Case, ...] = (
         {"full": Tier("coarse", estimate_s=2400)},
         shape_study,
         discretisation="as No. 2 (coarse)",
-        figures=("study.png",),
+        figures=("study.png", DEGREE_FIGURE),
     ),
     Case(
         "field_cluster",

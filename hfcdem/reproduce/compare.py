@@ -318,7 +318,36 @@ def four_charges(r: CaseResult) -> list[Comparison]:
     )(r)
     order = (("no2", "no3", "No. 2 breaks below No. 3 (lowest and highest)"),)
     rows += _orderings(r, order) + _spread(r, references.CHARGES) + first_cracks(r)
+    plot_degrees(_degrees(r), r.directory / DEGREE_FIGURE, "the four charges (Fig. 19)")
     return rows + failure_modes(r) + charge_degrees(r)
+
+
+#: the figure of fracture degree against breakdown a study case draws into its directory
+DEGREE_FIGURE = "degree.png"
+
+
+def plot_degrees(values: Mapping[str, tuple[float, float]], path: Path, what: str) -> None:
+    """Draw fracture degree against the peak pressure, one labelled point per case."""
+    if len(values) < 2:
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.5, 4.0))
+    for name, (peak, degree) in values.items():
+        ax.plot(peak, 100 * degree, "o", color="C0")
+        ax.annotate(_shown(name), (peak, 100 * degree), textcoords="offset points",
+                    xytext=(4, 4), fontsize=8)  # fmt: skip
+    ax.set_xlabel("breakdown: highest pressure of the run (MPa)")
+    ax.set_ylabel("fracture degree (%)")
+    ax.set_title(f"Fracture degree against breakdown, {what}", fontsize=9)
+    fig.text(0.01, 0.01, "the paper: the lower the breakdown, the higher the degree",
+             fontsize=7, color="grey")  # fmt: skip
+    fig.tight_layout(rect=(0, 0.03, 1, 1))
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
 
 
 def failure_modes(r: CaseResult) -> list[Comparison]:
@@ -475,6 +504,7 @@ def shape_study(r: CaseResult) -> list[Comparison]:
     """Each model's peak against the paper's, and the orderings the paper draws."""
     rows = _peak_rows(references.SHAPES, "model", "the paper's CDEM (Fig. 21)")(r)
     rows += _orderings(r, references.SHAPE_ORDERINGS) + _spread(r, references.SHAPES)
+    plot_degrees(_degrees(r), r.directory / DEGREE_FIGURE, "the shape study (Fig. 21)")
     return rows + shape_degrees(r)
 
 
@@ -512,6 +542,7 @@ def peak_against(
 
 
 __all__ = [
+    "DEGREE_FIGURE",
     "CaseResult",
     "Comparison",
     "borehole_limit",
@@ -524,6 +555,7 @@ __all__ = [
     "lab_specimen",
     "paper_trend",
     "peak_against",
+    "plot_degrees",
     "shape_degrees",
     "shape_study",
     "sneddon",
