@@ -318,8 +318,14 @@ def four_charges(r: CaseResult) -> list[Comparison]:
     )(r)
     order = (("no2", "no3", "No. 2 breaks below No. 3 (lowest and highest)"),)
     rows += _orderings(r, order) + _spread(r, references.CHARGES) + first_cracks(r)
-    plot_degrees(_degrees(r), r.directory / DEGREE_FIGURE, "the four charges (Fig. 19)")
+    plot_degrees(_degrees(r), r.directory / DEGREE_FIGURE, f"the four charges (Fig. 19){_mesh(r)}")
     return rows + failure_modes(r) + charge_degrees(r)
+
+
+def _mesh(r: CaseResult) -> str:
+    """Return ", coarse mesh" (the cases' named resolution), or nothing when none is named."""
+    names = sorted({str(sc.resolution) for sc in r.scenes if sc.resolution})
+    return f", {', '.join(names)} mesh" if names else ""
 
 
 #: the figure of fracture degree against breakdown a study case draws into its directory
@@ -504,7 +510,7 @@ def shape_study(r: CaseResult) -> list[Comparison]:
     """Each model's peak against the paper's, and the orderings the paper draws."""
     rows = _peak_rows(references.SHAPES, "model", "the paper's CDEM (Fig. 21)")(r)
     rows += _orderings(r, references.SHAPE_ORDERINGS) + _spread(r, references.SHAPES)
-    plot_degrees(_degrees(r), r.directory / DEGREE_FIGURE, "the shape study (Fig. 21)")
+    plot_degrees(_degrees(r), r.directory / DEGREE_FIGURE, f"the shape study (Fig. 21){_mesh(r)}")
     return rows + shape_degrees(r)
 
 
