@@ -138,7 +138,7 @@ def main() -> None:
     matrices, place = record(args.resolution, args.duration, args.matrices)
     if not matrices:
         raise SystemExit("no joints' Newton matrix was formed")
-    refactor, solve = costs(matrices[0])
+    refactor, solve = costs(matrices[0].duplicate(copy=True))  # a copy: costs() rescales it
     even = refactor / (2.0 * solve)
     size, nnz = matrices[0].getSize()[0], int(matrices[0].getInfo()["nz_used"])
     print(f"joints: {size} unknowns, {nnz} nonzeros")
