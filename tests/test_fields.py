@@ -68,3 +68,13 @@ def test_fields_of_the_tiny_solid_cover_every_owned_interface():
     seen = solid.comm.allreduce(float(np.sum(data["fluid_pressure_MPa"])), op=MPI.SUM)
     assert seen == pytest.approx(3.0)  # 1 + 2 MPa, zero on the intact interfaces
     assert solid.comm.allreduce(int(np.sum(data["state"] > 0)), op=MPI.SUM) == 2
+    assert not np.any(data["joint_pressure_MPa"])  # no joint pressure in the loads
+    # pressure inside intact joints (e.g. permeated wall joints) comes from the loads
+    intact = solid.state == 0
+    joints = np.where(intact, 3e6, 0.0)
+    loads = Loads(joint_pressure=joints)
+    solid.solve(loads)
+    _, data = interface_fields(solid, loads, network.view, pressure, aperture, sat)
+    assert np.array_equal(data["joint_pressure_MPa"], joints[solid.owned] / 1e6)
+    held = solid.comm.allreduce(int(np.sum(data["joint_pressure_MPa"] == 3.0)), op=MPI.SUM)
+    assert held == solid.comm.allreduce(int(np.sum(intact & solid.owned)), op=MPI.SUM) > 0

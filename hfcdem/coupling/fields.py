@@ -114,7 +114,10 @@ def interface_fields(
     Data: failure state (0 intact, 1 tensile, 2 shear), mechanical opening (m),
     normal traction (MPa, tension positive), and the fluid's pressure (MPa),
     saturation and hydraulic aperture (m) from the network arrays, zero where no
-    fluid cell is.  ``loads`` must be the loads of the solid's current displacement.
+    fluid cell is; ``joint_pressure_MPa``: the pressure inside intact joints
+    that the loads carry (e.g. permeated wall joints at the cavity pressure),
+    which the network arrays do not hold.  ``loads`` must be the loads of the
+    solid's current displacement.
     """
     snap = solid.snapshot(loads)
     n = solid.num_facets
@@ -125,11 +128,13 @@ def interface_fields(
         local["saturation"][loc] = sat[pos]
         local["aperture"][loc] = aperture[pos]
     own = solid.owned
+    joints = np.zeros(n) if loads.joint_pressure is None else np.asarray(loads.joint_pressure)
     data = {
         "state": solid.state[own].astype(float),
         "opening_m": snap.opening[own],
         "normal_traction_MPa": snap.normal_traction[own] / 1e6,
         "fluid_pressure_MPa": local["pressure"][own],
+        "joint_pressure_MPa": joints[own] / 1e6,
         "saturation": local["saturation"][own],
         "aperture_m": local["aperture"][own],
     }
