@@ -283,7 +283,7 @@ def _peak_rows(
         out = []
         for row in r.rows:
             name = str(row["value"])
-            shown = f"No. {name[2:]}" if name.startswith("no") else f"{label} {name}"
+            shown = _shown(name) if name.startswith("no") else f"{label} {name}"
             bd = row.get("breakdown_pressure_MPa")
             peak = row.get("peak_pressure_MPa")
             note = "confirmed by a drop" if bd else "highest pressure of the run, no drop"
@@ -415,6 +415,7 @@ def _degrees(r: CaseResult) -> dict[str, tuple[float, float]]:
 
 
 def _shown(name: str) -> str:
+    """Return a case's name as the paper writes it: "no2" -> "No. 2", others unchanged."""
     return f"No. {name[2:]}" if name.startswith("no") else name
 
 
