@@ -32,6 +32,35 @@ JOINT_HYDRAULIC_APERTURE = 1.0e-6
 
 
 @dataclass(frozen=True)
+class JointAperture:
+    """The intact joints' aperture ``value`` (m), held at cells of ``reference_size`` (m).
+
+    ``reference_size=None``: the same aperture on every facet whatever the mesh
+    (the equivalent medium then follows the mesh size); otherwise each facet's
+    apertures follow its cells' size (:mod:`hfcdem.flow.apertures` says why).
+    """
+
+    value: float
+    reference_size: float | None = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.value) and self.value > 0.0):
+            raise ValueError(f"joint aperture must be > 0 m, got {self.value!r}")
+        ref = self.reference_size
+        if ref is not None and not (math.isfinite(ref) and ref > 0.0):
+            raise ValueError(f"joint reference size must be a cell size > 0 m, got {ref!r}")
+
+    def scaled(self, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Hydraulic and void apertures (m) of facets whose two cells measure ``h`` (m)."""
+        h = np.asarray(h, dtype=float)
+        if self.reference_size is None:
+            same = np.full(h.shape, self.value)
+            return same, same.copy()
+        ratio = h / self.reference_size
+        return self.value * np.cbrt(ratio), self.value * ratio
+
+
+@dataclass(frozen=True)
 class ElasticMaterial:
     """Isotropic linear elastic rock (Pa, -)."""
 
@@ -287,4 +316,5 @@ __all__ = [
     "InSituStress",
     "Injection",
     "InterfaceModel",
+    "JointAperture",
 ]

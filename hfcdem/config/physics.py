@@ -14,6 +14,8 @@ them so a run's record can print what was assumed.  Any invalid field raises
     cohesion = "17 MPa"
     friction_angle = "30 deg"
     joint_aperture = "1 um"     # hydraulic aperture of the intact joints (wall_joints = "seepage")
+    joint_reference_size = "5 mm"  # optional: cell size at which joint_aperture holds
+                                # (apertures then follow the mesh size: hfcdem.flow.apertures)
     weibull_modulus = 5         # optional scatter of the strengths
     spring_factor = 100         # alpha in kn = alpha E / h
 
@@ -88,6 +90,7 @@ from hfcdem.config.materials import (
     Injection,
     InSituStress,
     InterfaceModel,
+    JointAperture,
 )
 from hfcdem.config.tables import SceneError, TomlTable
 from hfcdem.config.units import parse_quantity
@@ -166,6 +169,7 @@ class Physics:
     wall_film: float | None = None
     wall_joints: str = "dry"
     joint_aperture: float = JOINT_HYDRAULIC_APERTURE  # m, the intact joints' (seepage)
+    joint_reference_size: float | None = None  # m, cell size at which joint_aperture holds
     pressure_step: float | None = None  # Pa per step of a seepage ramp (None: time_step)
     rigid_cavity: bool = False
     output_interval: float | None = None  # None: duration / 20
@@ -176,6 +180,12 @@ class Physics:
     def __post_init__(self) -> None:
         if (self.injection is None) == (self.load is None):
             raise ValueError("a scene has exactly one of [injection] and [load]")
+        JointAperture(self.joint_aperture, self.joint_reference_size)  # checks both
+
+    @property
+    def joints(self) -> JointAperture:
+        """The intact joints' aperture and the cell size it holds at."""
+        return JointAperture(self.joint_aperture, self.joint_reference_size)
 
 
 class _Reader:
@@ -206,7 +216,7 @@ def _check(ok: bool, path: str, reason: str) -> None:
         raise SceneError(path, reason)
 
 
-def _read_rock(r: _Reader) -> tuple[ElasticMaterial, dict[str, Any], float]:
+def _read_rock(r: _Reader) -> tuple[ElasticMaterial, dict[str, Any], JointAperture]:
     """[rock]: the elastic material, the interface model's fields, the joints' aperture."""
     rock = r.section("rock")
     e = rock.quantity("youngs_modulus", "stress")
@@ -234,6 +244,14 @@ def _read_rock(r: _Reader) -> tuple[ElasticMaterial, dict[str, Any], float]:
         "rock.joint_aperture",
         f"expected a hydraulic aperture in (0, 1 mm], got {aperture!r} m",
     )
+    size = None
+    if rock.has("joint_reference_size"):
+        size = rock.quantity("joint_reference_size", "length")
+        _check(
+            1e-5 <= size <= 10.0,
+            "rock.joint_reference_size",
+            f"expected the cell size at which joint_aperture holds, 10 um to 10 m, got {size!r} m",
+        )
     rock.finish()
 
     model = {
@@ -243,7 +261,7 @@ def _read_rock(r: _Reader) -> tuple[ElasticMaterial, dict[str, Any], float]:
         "friction_angle": phi,
         "weibull_modulus": weibull,
     }
-    return ElasticMaterial(e, nu), model, aperture
+    return ElasticMaterial(e, nu), model, JointAperture(aperture, size)
 
 
 def _read_stress(r: _Reader) -> InSituStress:
@@ -525,7 +543,8 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             stress=stress,
             fluid=fluid,
             solver=solver,
-            joint_aperture=aperture,
+            joint_aperture=aperture.value,
+            joint_reference_size=aperture.reference_size,
             **pump,
             **output,
             defaulted=tuple(r.defaulted),

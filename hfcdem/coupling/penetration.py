@@ -33,6 +33,7 @@ from mpi4py import MPI
 from hfcdem.config.materials import Fluid
 from hfcdem.coupling.condense import cavity_vertices, mesh_cavity_volume
 from hfcdem.coupling.events import facets_to_break, switch_contacts
+from hfcdem.flow.apertures import JointAperture, network_apertures
 from hfcdem.flow.seepage import JointSeepage, joint_network, network_positions
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.equilibrium import critical_factor
@@ -174,7 +175,7 @@ def ramp_breakdown(
     solid: CDEMSolid,
     cavity: Sequence[str],
     fluid: Fluid,
-    aperture: float | np.ndarray,
+    aperture: float | np.ndarray | JointAperture,
     ramp: PressureRamp | CavityPumping,
     progress: Callable[[str], None] | None = None,
 ) -> RampBreakdown:
@@ -187,7 +188,8 @@ def ramp_breakdown(
     ``solid`` with every interface intact or a pre-existing crack, full or
     reduced (a reduced solid's zone is freed first: the joints' pressure loads
     every interface of it); ``aperture``: hydraulic aperture of the joints (m), one
-    value or one per network facet.
+    value or one per network facet, or a :class:`~hfcdem.flow.apertures.JointAperture`
+    that follows the mesh size.
     """
     for name in cavity:
         solid.tmesh.facet_tag(name)  # clear error for unknown groups
@@ -250,19 +252,24 @@ class _Drive:
         solid: CDEMSolid,
         cavity: tuple[str, ...],
         fluid: Fluid,
-        aperture: float | np.ndarray,
+        aperture: float | np.ndarray | JointAperture,
         ramp: PressureRamp | CavityPumping,
     ) -> None:
         self.solid, self.cavity, self.ramp = solid, cavity, ramp
         self.joints = np.flatnonzero((solid.state == FacetState.INTACT) & ~solid.is_crack)
         self.net = joint_network(solid, cavity_vertices(solid, cavity, None), self.joints)
         self.local = network_positions(solid, self.net, self.joints)
+        void = None
+        if isinstance(aperture, JointAperture):
+            aperture, void = network_apertures(solid, self.net, self.joints, aperture)
         if ramp.filling == "saturation":  # dry joints hold no pressure
             self.seep = JointSeepage(
-                self.net, aperture, fluid, filling="saturation", saturation=0.0
+                self.net, aperture, fluid, filling="saturation", saturation=0.0, void_aperture=void
             )
         else:
-            self.seep = JointSeepage(self.net, aperture, fluid, pressure=ramp.initial_pressure)
+            self.seep = JointSeepage(
+                self.net, aperture, fluid, pressure=ramp.initial_pressure, void_aperture=void
+            )
         self.wall = np.unique(self.seep.cavity_facets)
         self.storage = None
         if isinstance(ramp, CavityPumping):

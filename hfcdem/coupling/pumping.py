@@ -62,6 +62,7 @@ from hfcdem.coupling.events import (
 )
 from hfcdem.coupling.groups import local_network
 from hfcdem.coupling.penetration import CavityPumping, illinois_root, settle_excavation
+from hfcdem.flow.apertures import JointAperture, network_apertures
 from hfcdem.flow.network import Network, gather_rows
 from hfcdem.flow.seepage import (
     CavityDry,
@@ -179,7 +180,7 @@ def pump_with_seepage(
     solid: CDEMSolid,
     cavity: Sequence[str],
     fluid: Fluid,
-    aperture: float,
+    aperture: float | JointAperture,
     pumping: CavityPumping,
     progress: Callable[[str], None] | None = None,
     max_state_iterations: int = 200,
@@ -190,7 +191,8 @@ def pump_with_seepage(
 
     ``solid``: full, or reduced (every interface of its zone is freed first:
     the joints' pressure loads them all, so only the rock outside the zone stays
-    continuous); ``aperture``: hydraulic aperture of the joints (m);
+    continuous); ``aperture``: hydraulic aperture of the joints (m), or a
+    :class:`~hfcdem.flow.apertures.JointAperture` that follows the mesh size;
     ``supports``: walls that hold the blocks cut loose against them (a cased
     wellbore's; :func:`~hfcdem.coupling.events.release_debris`).  Runs for
     ``pumping.duration`` in ``pumping.steps`` steps (more where a step is
@@ -198,8 +200,8 @@ def pump_with_seepage(
     and after every step with the time and the fluid pressure and saturation
     per local facet (:meth:`_PumpedCavity.fields`).
     """
-    if not (math.isfinite(aperture) and aperture > 0.0):
-        raise ValueError(f"aperture must be a joint aperture > 0 m, got {aperture!r}")
+    if not isinstance(aperture, JointAperture):
+        aperture = JointAperture(aperture)  # checks it
     for name in (*cavity, *supports):
         solid.tmesh.facet_tag(name)  # clear error for unknown groups
     solid.free_interfaces(np.ones(solid.num_facets, dtype=bool))  # (0 in the full mode)
@@ -246,7 +248,7 @@ class _PumpedCavity:
         solid: CDEMSolid,
         cavity: tuple[str, ...],
         fluid: Fluid,
-        aperture: float,
+        aperture: JointAperture,
         pumping: CavityPumping,
         supports: tuple[str, ...] = (),
     ) -> None:
@@ -351,13 +353,15 @@ class _PumpedCavity:
                 if j is not None:
                     q[i] = old_q[j]
         sat = np.clip(np.where(q < 0.0, 1.0 + q / self.kw, 1.0), 0.0, 1.0)
+        hydraulic, void = network_apertures(solid, net, facets, self.aperture)
         seep = JointSeepage(
             net,
-            self.aperture,
+            hydraulic,
             self.fluid,
             pressure=np.maximum(q, 0.0),
             filling="saturation",
             saturation=sat,
+            void_aperture=void,
         )
         return facets, net, network_positions(solid, net, facets), seep
 

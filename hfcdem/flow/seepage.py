@@ -101,6 +101,17 @@ def network_positions(solid: CDEMSolid, net: Network, facets: np.ndarray) -> np.
     return np.asarray([index[tuple(int(v) for v in k)] for k in keys], dtype=np.int64)
 
 
+def _apertures(name: str, value: float | np.ndarray, n: int) -> np.ndarray:
+    """``value`` as ``n`` apertures (m), each finite and > 0."""
+    ap = np.asarray(value, dtype=float)
+    if ap.ndim not in (0, 1) or (ap.ndim == 1 and ap.shape != (n,)):
+        raise ValueError(f"{name} must be one value or {n} values (m)")
+    ap = np.broadcast_to(ap, (n,)).copy()
+    if n and not (np.all(np.isfinite(ap)) and ap.min() > 0.0):
+        raise ValueError(f"{name} must be finite and > 0 m on every facet, min {ap.min()!r}")
+    return ap
+
+
 def _finite(name: str, value: float, unit: str) -> float:
     v = float(value)
     if not math.isfinite(v):
@@ -185,6 +196,11 @@ class JointSeepage:
     saturation
         Initial saturation in [0, 1], ``(n,)`` or one value (1: full).  Below 1
         only with ``filling="saturation"``, and only where the pressure is 0.
+    void_aperture
+        Aperture of each facet's void (m), ``(n,)`` or one value: its fluid
+        volume is ``void_aperture * area``.  Default: ``aperture`` (one aperture
+        for flow and storage); :mod:`hfcdem.flow.apertures` gives the two apart
+        when the apertures follow the mesh size.
 
     """
 
@@ -196,23 +212,22 @@ class JointSeepage:
         pressure: float | np.ndarray = 0.0,
         filling: str = "compressible",
         saturation: float | np.ndarray = 1.0,
+        void_aperture: float | np.ndarray | None = None,
     ) -> None:
         if filling not in FILLING_MODES:
             raise ValueError(f"filling must be one of {FILLING_MODES}, got {filling!r}")
         n = net.size
-        ap = np.asarray(aperture, dtype=float)
-        if ap.ndim not in (0, 1) or (ap.ndim == 1 and ap.shape != (n,)):
-            raise ValueError(f"aperture must be one value or {n} values (m)")
-        ap = np.broadcast_to(ap, (n,)).copy()
-        if n and not (np.all(np.isfinite(ap)) and ap.min() > 0.0):
-            raise ValueError(f"aperture must be finite and > 0 m on every facet, min {ap.min()!r}")
+        ap = _apertures("aperture", aperture, n)
+        void = ap.copy() if void_aperture is None else _apertures("void_aperture", void_aperture, n)
         self.net = net
         self.fluid = fluid
         self.aperture = ap
-        self.storage = ap * net.area / fluid.bulk_modulus  # m^3/Pa per facet
+        self.void_aperture = void
+        self.void = void * net.area  # m^3 per facet at zero pressure
+        self.storage = self.void / fluid.bulk_modulus  # m^3/Pa per facet
         self.transmissibility = net.transmissibility(ap, fluid.conductivity)  # m^3/(Pa s)
-        self.aperture.flags.writeable = False
-        self.storage.flags.writeable = False
+        for arr in (self.aperture, self.void_aperture, self.void, self.storage):
+            arr.flags.writeable = False
         self.transmissibility.flags.writeable = False
         self.filling = filling
         # q: the pressure of a full joint, Kw (S - 1) below it (see hfcdem.flow.filling)
@@ -254,7 +269,7 @@ class JointSeepage:
     @property
     def content(self) -> np.ndarray:
         """Fluid content of every facet, ``V (1 + q / Kw)`` (m^3 at zero pressure)."""
-        return self.aperture * self.net.area + self.storage * self._q
+        return self.void + self.storage * self._q
 
     @property
     def newton_iterations(self) -> int:
@@ -397,7 +412,7 @@ class JointSeepage:
             raise ValueError("step_pumped needs filling='saturation'")
         old = self._q
         kw = self.fluid.bulk_modulus
-        void = self.aperture * self.net.area
+        void = self.void
         a2, a1, a0 = cavity.coefficients()
         base = float(void.sum()) - target
         if self.net.size == 0:
@@ -461,7 +476,7 @@ class JointSeepage:
         A fraction of the void, or the round-off of the facet's flux sum when that
         is larger (a long step on full joints: fluxes far above the void).
         """
-        void = self.aperture * self.net.area
+        void = self.void
         return dt / np.maximum(void, _ROUNDOFF * dt * self._reach * pmax / FILLING_TOLERANCE)
 
     def _linear_solve(self, lin: Linearisation, shift: np.ndarray, rhs: np.ndarray) -> np.ndarray:

@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
+from hfcdem.config.physics import Physics
 from hfcdem.config.scene import Scene
 from hfcdem.config.tables import SceneError
 from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakdown
@@ -50,6 +51,12 @@ from hfcdem.io.series import InterfaceFrames
 from hfcdem.solid.cdem import CDEMSolid
 
 _MODES = {1: "tensile", 2: "shear"}
+
+
+def _held_at(phys: Physics) -> str:
+    """`` at cells of N mm`` when the apertures follow the mesh size (else nothing)."""
+    size = phys.joint_reference_size
+    return "" if size is None else f" at cells of {size * 1e3:.3g} mm (following the mesh)"
 
 
 def seepage_loading(scene: Scene) -> PressureRamp | CavityPumping:
@@ -125,11 +132,12 @@ def run_seepage_ramp(
         what = f"a ramp of {ramp.rate / 1e6:.4g} MPa/s"
     say(
         f"seepage: {what} from {ramp.initial_pressure / 1e6:.4g} MPa, {ramp.steps} steps; "
-        f"joints of hydraulic aperture {phys.joint_aperture * 1e6:.3g} um fill from dry"
+        f"joints of hydraulic aperture {phys.joint_aperture * 1e6:.3g} um{_held_at(phys)} "
+        "fill from dry"
     )
     if isinstance(ramp, CavityPumping):
         return _run_pumped(scene, solid, (cavity, supports), ramp, out, say, record)
-    result = ramp_breakdown(solid, cavity, phys.fluid, phys.joint_aperture, ramp, progress=say)
+    result = ramp_breakdown(solid, cavity, phys.fluid, phys.joints, ramp, progress=say)
     if result.stopped:
         say(f"stopped: {result.stopped}")
     elif result.initial_failures:
@@ -161,6 +169,7 @@ def run_seepage_ramp(
         "joints_holding_pressure": result.wet_fraction,
         "wall_joint_pressure_ratio": result.wall_joint_pressure,
         "joint_aperture_m": phys.joint_aperture,
+        "joint_reference_size_m": phys.joint_reference_size,
         "pressure_rate_MPa_per_s": ramp.rate / 1e6 if isinstance(ramp, PressureRamp) else None,
         "cavity_storage_m3_per_Pa": result.cavity_storage,
         "max_mass_error": result.max_mass_error,
@@ -246,7 +255,7 @@ def _run_pumped(
         solid,
         cavity,
         phys.fluid,
-        phys.joint_aperture,
+        phys.joints,
         pumping,
         progress=say,
         frames=frame,
@@ -288,6 +297,7 @@ def _run_pumped(
         "initial_failures": result.initial_failures,
         "joints_holding_pressure": result.history[-1][6] if result.history else 0.0,
         "joint_aperture_m": phys.joint_aperture,
+        "joint_reference_size_m": phys.joint_reference_size,
         "pumping_rate_m3_per_s": pumping.rate,
         "max_mass_error": result.max_mass_error,
         "secant_balances": result.secant_balances,
