@@ -37,6 +37,7 @@ from hfcdem.reproduce.kgd_series import (
     stress_worsens_coarse,
 )
 from hfcdem.reproduce.rubin import rubin
+from hfcdem.reproduce.saturation import SATURATION_FIGURE, SEEPAGE_RUNG, saturation_in_time
 
 TIERS = ("quick", "full")
 FIDELITIES = ("scene", "uniform", "viscous", "seepage")
@@ -348,6 +349,20 @@ CASES: tuple[Case, ...] = (
         "and from the middle (122.5 mm) to the far end (182 mm), further from the root "
         "(benchmarks/README.md, 2026-12-04); the breakdown at default is not measured",
         figures=("pressure.png", "fracture.png"),
+    ),
+    Case(
+        "no2_seepage",
+        "perforation",
+        "Perforation No. 2 with the joints filling in time (sec. 4.4, Figs. 14 and 15)",
+        "scene",
+        "meshes/scenes/perforation_no2.toml",
+        {"full": Tier("coarse", fixed=SEEPAGE_RUNG, estimate_s=600)},
+        saturation_in_time,
+        discretisation="not measured; the joints' void follows the mesh (1.085 / 2.071 / "
+        "3.217 m^2 of joints in the zone at the coarse / default / paper mesh, "
+        "docs/seepage.md)",
+        note="the fidelity ladder's seepage rung (benchmarks/fidelity_ladder.py)",
+        figures=(SATURATION_FIGURE, "pressure.png"),
     ),
     Case(
         "four_charges",
