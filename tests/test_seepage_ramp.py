@@ -54,6 +54,7 @@ def test_viscous_fluid_breaks_the_wall_dry_and_water_below(shared_tmp_path):
     assert summary["first_crack"]["mode"] == "tensile"
     x, y, _ = summary["first_crack"]["point_m"]
     assert abs(y) < 1e-9 and A < abs(x) < A + A / 5  # on the SH axis, one element deep
+    assert summary["first_crack"]["distance_from_wellbore_wall_m"] == pytest.approx(abs(x) - A)
     for name in ("summary.json", "history.csv", "joints.vtu", "pressure.png"):
         assert (out / name).stat().st_size > 0, name
     assert json.loads((out / "summary.json").read_text())["kind"] == "seepage_ramp"

@@ -513,16 +513,27 @@ def _first_crack(scene: Scene, frac: HydraulicFracture) -> dict[str, Any] | None
         return None
     point = np.zeros(3)
     point[:width] = np.asarray(total)[:width] / count
-    out: dict[str, Any] = {"point_m": point.tolist(), "interfaces": count}
+    return {"point_m": point.tolist(), "interfaces": count} | wellbore_place(scene, point)
+
+
+def wellbore_place(scene: Scene, point: np.ndarray) -> dict[str, Any]:
+    """Return a point's ``distance_from_wellbore_wall_m`` and, with tunnels, its ``place``.
+
+    The distance is measured across the wellbore axis (0 at a perforation root);
+    nothing without a wellbore.
+    """
     wellbore = getattr(scene.geometry, "wellbore", None)
-    if wellbore is not None:
-        across = point.copy()
-        across["xyz".index(wellbore.axis)] = 0.0
-        out["distance_from_wellbore_wall_m"] = float(np.linalg.norm(across) - wellbore.radius)
-        tunnels = getattr(scene.geometry, "perforations", ())
-        if tunnels:
-            length = max(t.profile.stations[-1] for t in tunnels)
-            out["place"] = tunnel_place(out["distance_from_wellbore_wall_m"], length)
+    if wellbore is None:
+        return {}
+    across = np.zeros(3)
+    across[: len(point)] = point
+    across["xyz".index(wellbore.axis)] = 0.0
+    distance = float(np.linalg.norm(across) - wellbore.radius)
+    out: dict[str, Any] = {"distance_from_wellbore_wall_m": distance}
+    tunnels = getattr(scene.geometry, "perforations", ())
+    if tunnels:
+        length = max(t.profile.stations[-1] for t in tunnels)
+        out["place"] = tunnel_place(distance, length)
     return out
 
 
@@ -573,5 +584,7 @@ __all__ = [
     "pressurised_groups",
     "run_scene",
     "scene_fingerprint",
+    "tunnel_place",
     "wall_area",
+    "wellbore_place",
 ]

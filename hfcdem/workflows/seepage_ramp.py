@@ -159,7 +159,7 @@ def run_seepage_ramp(
         "breakdown_time_s": result.time,
         "first_crack_pressure_MPa": pb / 1e6 if pb is not None else None,
         "first_crack_time_s": result.time,
-        "first_crack": _first_crack(location, result.mode),
+        "first_crack": _first_crack(scene, location, result.mode),
         "peak_pressure_MPa": (
             max((r[1] for r in result.history), default=ramp.initial_pressure) / 1e6
             if pb is None
@@ -221,14 +221,18 @@ def _joint_fields(
     return solid.vertex_coords[own], data
 
 
-def _first_crack(location: np.ndarray | None, mode: int | None) -> dict[str, Any] | None:
-    """Return the summary's first crack: its point in 3D coordinates (m) and its mode."""
+def _first_crack(
+    scene: Scene, location: np.ndarray | None, mode: int | None
+) -> dict[str, Any] | None:
+    """Return the summary's first crack: its point in 3D coordinates (m), its mode and place."""
+    from hfcdem.workflows.run import wellbore_place
+
     if location is None:
         return None
-    return {
-        "point_m": [*map(float, location), *([0.0] * (3 - len(location)))],
-        "mode": _MODES.get(int(mode or 0), "intact"),
-    }
+    point = [*map(float, location), *([0.0] * (3 - len(location)))]
+    return {"point_m": point, "mode": _MODES.get(int(mode or 0), "intact")} | wellbore_place(
+        scene, np.asarray(point)
+    )
 
 
 def _run_pumped(
@@ -290,7 +294,7 @@ def _run_pumped(
         "breakdown_note": _pumping_note(result),
         "first_crack_pressure_MPa": first / 1e6 if first is not None else None,
         "first_crack_time_s": result.first_time,
-        "first_crack": _first_crack(location, result.first_mode),
+        "first_crack": _first_crack(scene, location, result.first_mode),
         "tensile_failures": result.tensile,
         "shear_failures": result.shear,
         "fracture_degree": solid.fracture_degree(),
