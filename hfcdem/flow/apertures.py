@@ -5,7 +5,9 @@ joints per unit volume.  With one aperture ``a`` on every facet the network's
 void per unit volume and its equivalent conductivity both grow as ``1 / h``
 (docs/seepage.md: ``k_eq h`` is the same on four annulus meshes; No. 2's zone
 holds twice the void at the default mesh as at the coarse one), so the rock
-the fluid seeps into changes with the mesh.
+the fluid seeps into changes with the mesh.  The filling front's speed, which
+goes as their ratio (``~ a^2``), does not: a prescribed cavity pressure hardly
+notices, a pumped cavity does (its pressure follows what the joints take).
 
 Given the cell size ``h_ref`` at which ``a`` holds, each facet gets
 
