@@ -261,7 +261,7 @@ class _Drive:
         self.local = network_positions(solid, self.net, self.joints)
         void = None
         if isinstance(aperture, JointAperture):
-            aperture, void = network_apertures(solid, self.net, self.joints, aperture)
+            aperture, void = network_apertures(solid, self.net, self.joints, aperture, self.local)
         if ramp.filling == "saturation":  # dry joints hold no pressure
             self.seep = JointSeepage(
                 self.net, aperture, fluid, filling="saturation", saturation=0.0, void_aperture=void

@@ -70,6 +70,7 @@ from hfcdem.flow.seepage import (
     JointSeepage,
     joint_network,
     network_positions,
+    network_values,
 )
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.equilibrium import critical_factor
@@ -353,7 +354,8 @@ class _PumpedCavity:
                 if j is not None:
                     q[i] = old_q[j]
         sat = np.clip(np.where(q < 0.0, 1.0 + q / self.kw, 1.0), 0.0, 1.0)
-        hydraulic, void = network_apertures(solid, net, facets, self.aperture)
+        positions = network_positions(solid, net, facets)
+        hydraulic, void = network_apertures(solid, net, facets, self.aperture, positions)
         seep = JointSeepage(
             net,
             hydraulic,
@@ -363,7 +365,7 @@ class _PumpedCavity:
             saturation=sat,
             void_aperture=void,
         )
-        return facets, net, network_positions(solid, net, facets), seep
+        return facets, net, positions, seep
 
     def joint_content(self) -> float:
         """Fluid in the seepage network (m^3 at zero pressure)."""
@@ -495,12 +497,7 @@ class _PumpedCavity:
         does not load (closed cracks).
         """
         g = cavity_joint_coupling(self.solid, opening)
-        local = np.zeros(self.net.size)
-        owned = self.solid.owned[self.facets]
-        np.add.at(local, self.positions[owned], g[self.facets][owned])
-        out = np.zeros_like(local)
-        self.solid.comm.Allreduce(local, out, op=MPI.SUM)
-        return out
+        return network_values(self.solid, self.net, self.facets, self.positions, g)
 
     def resolve(self, loads: Loads) -> None:
         """Solve at ``loads`` after a state change: new volume, slope and coupling.

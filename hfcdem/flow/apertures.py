@@ -26,28 +26,28 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from mpi4py import MPI
 
 from hfcdem.config.materials import JointAperture
 from hfcdem.flow.network import Network
-from hfcdem.flow.seepage import network_positions
+from hfcdem.flow.seepage import network_positions, network_values
 from hfcdem.solid.cdem import CDEMSolid
 
 
 def network_cell_sizes(
-    solid: CDEMSolid, net: Network, facets: Sequence[int] | np.ndarray
+    solid: CDEMSolid,
+    net: Network,
+    facets: Sequence[int] | np.ndarray,
+    positions: np.ndarray | None = None,
 ) -> np.ndarray:
     """Mean diameter of the two cells of every facet of ``net`` (m), the same on every rank.
 
-    ``facets``: the local interfaces ``net`` was built from (collective).
+    ``facets``: the local interfaces ``net`` was built from; ``positions``
+    their :func:`~hfcdem.flow.seepage.network_positions` when known (collective).
     """
-    local = np.unique(np.asarray(facets, dtype=np.int64))
-    owned = local[solid.owned[local]]
-    sizes = np.zeros(net.size)
-    sizes[network_positions(solid, net, owned)] = solid.h[owned]
-    # each joint is owned by one rank: the sum is its value, exactly
-    solid.comm.Allreduce(MPI.IN_PLACE, sizes, op=MPI.SUM)
-    return sizes
+    facets = np.asarray(facets, dtype=np.int64)
+    if positions is None:
+        positions = network_positions(solid, net, facets)
+    return network_values(solid, net, facets, positions, solid.h)
 
 
 def network_apertures(
@@ -55,16 +55,18 @@ def network_apertures(
     net: Network,
     facets: Sequence[int] | np.ndarray,
     aperture: float | JointAperture,
+    positions: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Hydraulic and void apertures of every facet of ``net`` (m; collective).
 
     A plain number is one aperture for every facet, flow and void alike.
+    ``positions``: as for :func:`network_cell_sizes`.
     """
     if not isinstance(aperture, JointAperture):
         aperture = JointAperture(float(aperture))
     if aperture.reference_size is None:
         return aperture.scaled(np.zeros(net.size))
-    return aperture.scaled(network_cell_sizes(solid, net, facets))
+    return aperture.scaled(network_cell_sizes(solid, net, facets, positions))
 
 
 __all__ = ["JointAperture", "network_apertures", "network_cell_sizes"]

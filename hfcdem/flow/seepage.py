@@ -35,6 +35,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from hfcdem.config.materials import JOINT_HYDRAULIC_APERTURE, PERMEABILITY_COEFFICIENT, Fluid
@@ -99,6 +100,24 @@ def network_positions(solid: CDEMSolid, net: Network, facets: np.ndarray) -> np.
     index = net.index()
     keys = np.sort(solid.vertex_ids[np.asarray(facets, dtype=np.int64)], axis=1)
     return np.asarray([index[tuple(int(v) for v in k)] for k in keys], dtype=np.int64)
+
+
+def network_values(
+    solid: CDEMSolid, net: Network, facets: np.ndarray, positions: np.ndarray, values: np.ndarray
+) -> np.ndarray:
+    """Per facet of ``net``, the ``values`` (one per local interface) of its owning rank.
+
+    ``facets``: local interfaces in ``net``, ``positions`` their
+    :func:`network_positions`.  Each joint is owned by one rank, so the sum over
+    ranks is its value exactly: the same array on every rank (collective).
+    """
+    facets = np.asarray(facets, dtype=np.int64)
+    owned = solid.owned[facets]
+    local = np.zeros(net.size)
+    local[positions[owned]] = np.asarray(values)[facets[owned]]
+    out = np.zeros_like(local)
+    solid.comm.Allreduce(local, out, op=MPI.SUM)
+    return out
 
 
 def _apertures(name: str, value: float | np.ndarray, n: int) -> np.ndarray:
@@ -711,4 +730,5 @@ __all__ = [
     "JointSeepage",
     "joint_network",
     "network_positions",
+    "network_values",
 ]
