@@ -12,6 +12,7 @@ from hfcdem.cli import main
 from hfcdem.reproduce.cases import CASES, select_cases
 from hfcdem.reproduce.compare import (
     DEGREE_FIGURE,
+    STRESS_FIGURE,
     CaseResult,
     Comparison,
     charge_degrees,
@@ -19,6 +20,8 @@ from hfcdem.reproduce.compare import (
     first_cracks,
     four_charges,
     shape_degrees,
+    stress_at_root,
+    stresses_at_roots,
     trend,
 )
 from hfcdem.reproduce.report import BEGIN, END, summary_table, update_readme
@@ -204,6 +207,42 @@ def test_first_cracks_of_the_four_charges_against_the_root(tmp_path):
     (row,) = first_cracks(CaseResult(tmp_path, (), rows=rows[1:]))
     assert row.met
     assert first_cracks(CaseResult(tmp_path, (), rows=({"value": "no1"},))) == []
+
+
+def _profile(peak, place, largest):
+    """A stress_along_tunnels result: six bins of 40 mm, the largest of the zone at ``place``."""
+    return {
+        "component": "sigma_xx", "unit": "MPa", "cells": 500, "tensile_cells": int(peak > 0),
+        "distance_m": [0.02 + 0.04 * k for k in range(6)], "largest_MPa": largest,
+        "mean_MPa": [v - 3 if v is not None else None for v in largest], "peak_MPa": peak,
+        "peak_point_m": [0.1, 0.0, 0.0], "peak_distance_from_wellbore_wall_m": 0.03,
+        "peak_place": place,
+    }  # fmt: skip
+
+
+def test_sigma_xx_at_the_first_crack_against_the_papers_root(tmp_path):
+    """Fig. 18: the largest sigma_xx, in tension, at the root; a row per scene, one per study."""
+    hot = _profile(1.5, "root", [1.5, -60.0, -61.0, -62.0, None, -63.0])
+    cold = _profile(-62.1, "beyond the tip", [-70.6, -70.8, -69.8, -70.5, -68.3, -72.3])
+    (row,) = stress_at_root({"first_crack": {"place": "middle", "sigma_xx": hot}})
+    assert row.met and row.ours == pytest.approx(1.5) and row.unit == "MPa"
+    assert "largest per third: root 1.5, middle -61.0, far end -63.0 MPa" in row.ours_text
+    assert "1 of 500 cells in tension" in row.ours_text
+    (row,) = stress_at_root({"first_crack": {"sigma_xx": cold}})
+    assert row.met is False
+    assert row.ours_text.startswith("largest -62.1 MPa, beyond the tip (30 mm)")
+    compressed_root = _profile(-5.0, "root", [-5.0] * 6)  # at the root, but not in tension
+    assert stress_at_root({"first_crack": {"sigma_xx": compressed_root}})[0].met is False
+    assert stress_at_root({"first_crack": {"place": "root"}}) == []  # a run from before
+
+    rows = ({"value": "no1", "first_crack": {"sigma_xx": hot}}, {"value": "no2"})
+    (row,) = stresses_at_roots(CaseResult(tmp_path, (), rows=rows))
+    assert row.met and row.ours == 1 and row.ours_text.startswith("1 of 1: No. 1: largest 1.5")
+    assert (tmp_path / STRESS_FIGURE).stat().st_size > 0
+    rows += ({"value": "no3", "first_crack": {"sigma_xx": cold}},)
+    (row,) = stresses_at_roots(CaseResult(tmp_path, (), rows=rows))
+    assert row.met is False and row.ours == 1 and "No. 3: largest -62.1" in row.ours_text
+    assert stresses_at_roots(CaseResult(tmp_path, (), rows=rows[1:2])) == []
 
 
 def test_failure_modes_of_the_four_charges_are_mostly_tensile(tmp_path):

@@ -18,6 +18,7 @@ from typing import Any
 from hfcdem import references
 from hfcdem.reproduce.compare import (
     DEGREE_FIGURE,
+    STRESS_FIGURE,
     CaseResult,
     Comparison,
     borehole_limit,
@@ -348,7 +349,7 @@ CASES: tuple[Case, ...] = (
         discretisation="coarse -> default moves the first crack from 61.64 to 58.05 MPa (-5.8 %) "
         "and from the middle (122.5 mm) to the far end (182 mm), further from the root "
         "(benchmarks/README.md, 2026-12-04); the breakdown at default is not measured",
-        figures=("pressure.png", "fracture.png"),
+        figures=("pressure.png", "fracture.png", STRESS_FIGURE),
     ),
     Case(
         "no2_seepage",
@@ -373,7 +374,7 @@ CASES: tuple[Case, ...] = (
         {"full": Tier("coarse", estimate_s=900)},
         four_charges,
         discretisation="as No. 2 (coarse)",
-        figures=("study.png", DEGREE_FIGURE),
+        figures=("study.png", DEGREE_FIGURE, STRESS_FIGURE),
     ),
     Case(
         "shape_study",

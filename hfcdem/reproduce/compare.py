@@ -15,9 +15,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from hfcdem import references
 from hfcdem.analytic import kgd_viscosity
 from hfcdem.config.geometry import Scene
+from hfcdem.workflows.places import STRESS_FIGURE, plot_stress_along_tunnels
 
 
 @dataclass(frozen=True)
@@ -319,7 +322,7 @@ def four_charges(r: CaseResult) -> list[Comparison]:
     order = (("no2", "no3", "No. 2 breaks below No. 3 (lowest and highest)"),)
     rows += _orderings(r, order) + _spread(r, references.CHARGES) + first_cracks(r)
     plot_degrees(_degrees(r), r.directory / DEGREE_FIGURE, f"the four charges (Fig. 19){_mesh(r)}")
-    return rows + failure_modes(r) + charge_degrees(r)
+    return rows + failure_modes(r) + charge_degrees(r) + stresses_at_roots(r)
 
 
 def _mesh(r: CaseResult) -> str:
@@ -521,6 +524,74 @@ def shape_study(r: CaseResult) -> list[Comparison]:
     return rows + shape_degrees(r)
 
 
+#: what the sigma_xx rows compare, and what the paper leaves open
+_STRESS_NOTE = (
+    "total stress of the rock beside the zone's interfaces (cell means), at the step of the "
+    "first crack (the paper: 10 s, its first cracks); the paper does not say which axis is "
+    "its x: ours is the tunnel's (SH)"
+)
+
+
+def _thirds(profile: Mapping[str, Any]) -> list[float | None]:
+    """Return the largest stress of each third of the tunnel (root, middle, far end)."""
+    out: list[float | None] = []
+    for part in np.array_split(np.arange(len(profile["largest_MPa"])), 3):
+        values = [profile["largest_MPa"][k] for k in part if profile["largest_MPa"][k] is not None]
+        out.append(max(values) if values else None)
+    return out
+
+
+def _stress_text(profile: Mapping[str, Any]) -> str:
+    """Where and how large the largest stress is, the largest per third, the cells in tension."""
+    parts = ", ".join(
+        f"{name} {'-' if v is None else f'{v:.1f}'}"
+        for name, v in zip(("root", "middle", "far end"), _thirds(profile), strict=True)
+    )
+    where = profile.get("peak_distance_from_wellbore_wall_m")
+    at = f" ({1e3 * where:.0f} mm)" if where is not None else ""
+    return (
+        f"largest {profile['peak_MPa']:.1f} MPa, {profile.get('peak_place')}{at}; "
+        f"largest per third: {parts} MPa; {profile.get('tensile_cells', 0)} of "
+        f"{profile['cells']} cells in tension"
+    )
+
+
+def stress_at_root(s: Mapping[str, Any]) -> list[Comparison]:
+    """Where a run's sigma_xx is largest at its first crack, against the paper's root (Fig. 18)."""
+    profile = (s.get("first_crack") or {}).get("sigma_xx")
+    if not profile:
+        return []
+    return [
+        Comparison("largest sigma_xx at the first crack", profile["peak_MPa"], unit="MPa",
+                   ours_text=_stress_text(profile), reference_text="at the root, in tension",
+                   agrees=profile.get("peak_place") == "root" and profile["peak_MPa"] > 0,
+                   source="the paper's Fig. 18 and sec. 4.4", note=_STRESS_NOTE)
+    ]  # fmt: skip
+
+
+def stresses_at_roots(r: CaseResult) -> list[Comparison]:
+    """Each case's sigma_xx at its first crack (one row) and the figure of them all."""
+    profiles = {}
+    for row in r.rows:
+        profile = (row.get("first_crack") or {}).get("sigma_xx")
+        if profile:
+            profiles[_shown(str(row["value"]))] = profile
+    if not profiles:
+        return []
+    plot_stress_along_tunnels(
+        r.directory / STRESS_FIGURE, profiles,
+        f"sigma_xx along the tunnels at each first crack (the paper's Fig. 18){_mesh(r)}",
+    )  # fmt: skip
+    hot = [p.get("peak_place") == "root" and p["peak_MPa"] > 0 for p in profiles.values()]
+    listed = "; ".join(f"{name}: {_stress_text(p)}" for name, p in profiles.items())
+    return [
+        Comparison("largest sigma_xx at the root, in tension, every charge", sum(hot),
+                   ours_text=f"{sum(hot)} of {len(hot)}: {listed}",
+                   reference_text="at the root, in tension, every charge", agrees=all(hot),
+                   source="the paper's Fig. 18 and sec. 4.4", note=_STRESS_NOTE)
+    ]  # fmt: skip
+
+
 def peak_against(
     quantity: str, reference: float, source: str, tolerance: float, note: str = ""
 ) -> Callable[[CaseResult], list[Comparison]]:
@@ -538,7 +609,7 @@ def peak_against(
         where, place = first.get("distance_from_wellbore_wall_m"), first.get("place")
         tunnels = getattr(r.scenes[0].geometry, "perforations", ()) if r.scenes else ()
         if place is None and where is not None and tunnels:  # a summary from before places
-            from hfcdem.workflows.run import tunnel_place
+            from hfcdem.workflows.places import tunnel_place
 
             place = tunnel_place(where, max(t.profile.stations[-1] for t in tunnels))
         if where is not None:
@@ -549,13 +620,14 @@ def peak_against(
                            reference_text="root", agrees=place == "root" if place else None,
                            source="the paper's Figs. 10 and 16")
             )  # fmt: skip
-        return rows
+        return rows + stress_at_root(s)
 
     return compare
 
 
 __all__ = [
     "DEGREE_FIGURE",
+    "STRESS_FIGURE",
     "CaseResult",
     "Comparison",
     "borehole_limit",
@@ -572,5 +644,7 @@ __all__ = [
     "shape_degrees",
     "shape_study",
     "sneddon",
+    "stress_at_root",
+    "stresses_at_roots",
     "trend",
 ]

@@ -57,6 +57,13 @@ from hfcdem.workflows.observers import (
     StepObserver,
     mesh_fingerprint,
 )
+from hfcdem.workflows.places import (
+    STRESS_FIGURE,
+    plot_stress_along_tunnels,
+    stress_along_tunnels,
+    tunnel_place,
+    wellbore_place,
+)
 
 ROLLER_AXES = {"symmetry_x": 0, "symmetry_y": 1, "symmetry_z": 2}
 
@@ -291,7 +298,7 @@ def _run_coupled(
     phys, comm = scene.physics, solid.comm
     frac = build_fracture(scene, solid)
     fingerprint = mesh_fingerprint(solid.tmesh)
-    first = FirstCrack(lambda f: _first_crack(scene, f))
+    first = FirstCrack(lambda f: _first_crack(scene, f, stress=True))
     if resume:
         _resume(frac, out, fingerprint, first, say, comm)
     resumed = bool(frac.history)
@@ -323,6 +330,12 @@ def _run_coupled(
         _plot_pressure(out / "pressure.png", times, pressures, found, scene.name)
     if phys.pictures:
         _picture_fracture(out / "fracture.png", scene, frac)
+    where = first.where or {}
+    profile = where.get("sigma_xx")
+    if profile and comm.rank == 0:
+        mesh = f"{scene.resolution or 'default'} mesh"
+        title = f"{scene.name} ({mesh}): the tunnel at the first crack, {where['time_s']:.3g} s"
+        plot_stress_along_tunnels(out / STRESS_FIGURE, {scene.name: profile}, title)
     comm.barrier()
     return summary
 
@@ -496,11 +509,15 @@ def _peak_memory_mb(comm: MPI.Comm, op: MPI.Op = MPI.SUM) -> float:
     return float(comm.allreduce(kb, op=op)) / 1024.0
 
 
-def _first_crack(scene: Scene, frac: HydraulicFracture) -> dict[str, Any] | None:
+def _first_crack(
+    scene: Scene, frac: HydraulicFracture, stress: bool = False
+) -> dict[str, Any] | None:
     """Where the injection's first interfaces broke (their mean midpoint).
 
     ``distance_from_wellbore_wall_m``: from the wellbore wall, measured across the
-    wellbore axis (0 at a perforation root); None without a wellbore.
+    wellbore axis (0 at a perforation root); None without a wellbore.  With
+    ``stress`` (called in the step of the first crack), ``sigma_xx``: the stress
+    along the tunnels then (:func:`stress_along_tunnels`, the paper's Fig. 18).
     """
     t = frac.first_break_time
     solid = frac.solid
@@ -513,40 +530,9 @@ def _first_crack(scene: Scene, frac: HydraulicFracture) -> dict[str, Any] | None
         return None
     point = np.zeros(3)
     point[:width] = np.asarray(total)[:width] / count
-    return {"point_m": point.tolist(), "interfaces": count} | wellbore_place(scene, point)
-
-
-def wellbore_place(scene: Scene, point: np.ndarray) -> dict[str, Any]:
-    """Return a point's ``distance_from_wellbore_wall_m`` and, with tunnels, its ``place``.
-
-    The distance is measured across the wellbore axis (0 at a perforation root);
-    nothing without a wellbore.
-    """
-    wellbore = getattr(scene.geometry, "wellbore", None)
-    if wellbore is None:
-        return {}
-    across = np.zeros(3)
-    across[: len(point)] = point
-    across["xyz".index(wellbore.axis)] = 0.0
-    distance = float(np.linalg.norm(across) - wellbore.radius)
-    out: dict[str, Any] = {"distance_from_wellbore_wall_m": distance}
-    tunnels = getattr(scene.geometry, "perforations", ())
-    if tunnels:
-        length = max(t.profile.stations[-1] for t in tunnels)
-        out["place"] = tunnel_place(distance, length)
-    return out
-
-
-def tunnel_place(distance: float, length: float) -> str:
-    """Name a distance from the wellbore wall in the paper's terms, for a tunnel ``length`` long.
-
-    The tunnel's thirds: ``root``, ``middle``, ``far end``; ``beyond the tip`` past it.
-    """
-    if distance <= length / 3.0:
-        return "root"
-    if distance <= 2.0 * length / 3.0:
-        return "middle"
-    return "far end" if distance <= length else "beyond the tip"
+    where = {"point_m": point.tolist(), "interfaces": count} | wellbore_place(scene, point)
+    profile = stress_along_tunnels(scene, solid) if stress and solid.gdim == 3 else None
+    return where | ({"time_s": t, "sigma_xx": profile} if profile else {})
 
 
 def _resolved_scene(scene: Scene) -> dict[str, Any]:

@@ -225,7 +225,7 @@ def _first_crack(
     scene: Scene, location: np.ndarray | None, mode: int | None
 ) -> dict[str, Any] | None:
     """Return the summary's first crack: its point in 3D coordinates (m), its mode and place."""
-    from hfcdem.workflows.run import wellbore_place
+    from hfcdem.workflows.places import wellbore_place
 
     if location is None:
         return None
