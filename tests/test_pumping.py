@@ -149,6 +149,22 @@ def test_bad_input(plate):
         pump_with_seepage(_solid(plate), ("no_such_group",), Fluid(), 5e-6, pumping)
 
 
+def test_the_first_break_is_announced_once_in_its_step(plate):
+    """``at_first_break`` sees the step of the first break, its broken facets in the solid."""
+    seen = []
+    solid = _solid(plate)
+
+    def announce(t):
+        seen.append((t, solid.broken_counts()["tensile"] + solid.broken_counts()["shear"]))
+
+    pumping = CavityPumping(Q, 40.0, steps=100)
+    run = pump_with_seepage(
+        solid, WALL, Fluid(viscosity=1.0), 1e-9, pumping, at_first_break=announce
+    )
+    assert len(seen) == 1
+    assert seen[0][0] == run.first_time and seen[0][1] >= 1
+
+
 def test_a_pressure_that_only_falls_has_no_breakdown(plate):
     """Open joints take more than the pump delivers: the start is not a peak."""
     pumping = CavityPumping(Q / 100, 2.0, steps=10, initial_pressure=5e6)

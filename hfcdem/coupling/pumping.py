@@ -187,6 +187,7 @@ def pump_with_seepage(
     max_state_iterations: int = 200,
     frames: Frames | None = None,
     supports: Sequence[str] = (),
+    at_first_break: Callable[[float], None] | None = None,
 ) -> PumpingResult:
     """Pump into the ``cavity`` facet groups and follow breaks and pressure (collective).
 
@@ -199,7 +200,9 @@ def pump_with_seepage(
     ``pumping.duration`` in ``pumping.steps`` steps (more where a step is
     shortened onto a break).  ``frames`` is called (collectively) at the start
     and after every step with the time and the fluid pressure and saturation
-    per local facet (:meth:`_PumpedCavity.fields`).
+    per local facet (:meth:`_PumpedCavity.fields`); ``at_first_break``
+    (collectively) with the time, after the step of the first break, when the
+    solid holds that step's state.
     """
     if not isinstance(aperture, JointAperture):
         aperture = JointAperture(aperture)  # checks it
@@ -217,7 +220,7 @@ def pump_with_seepage(
         )  # fmt: skip
     run = _PumpedCavity(solid, tuple(cavity), fluid, aperture, pumping, tuple(supports))
     try:
-        return run.run(initial_failures, progress, max_state_iterations, frames)
+        return run.run(initial_failures, progress, max_state_iterations, frames, at_first_break)
     finally:
         run.seep.destroy()
 
@@ -685,6 +688,7 @@ class _PumpedCavity:
         progress: Callable[[str], None] | None,
         max_iterations: int,
         frames: Frames | None = None,
+        at_first_break: Callable[[float], None] | None = None,
     ) -> PumpingResult:
         """Pump for the whole duration; return the result."""
         solid, pumping = self.solid, self.pumping
@@ -719,6 +723,8 @@ class _PumpedCavity:
                 frames(t, *self.fields())
             if worst is not None and first is None:
                 first = (worst[0], t, worst[1], worst[2])
+                if at_first_break is not None:
+                    at_first_break(t)
             held = self.volume * (1.0 + self.p / self.kw) + self.joint_content()
             error = abs(held - self.m0 - pumping.rate * t) / (pumping.rate * t)
             self.worst = max(self.worst, error)

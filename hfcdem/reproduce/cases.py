@@ -363,7 +363,7 @@ CASES: tuple[Case, ...] = (
         "3.217 m^2 of joints in the zone at the coarse / default / paper mesh, "
         "docs/seepage.md)",
         note="the fidelity ladder's seepage rung (benchmarks/fidelity_ladder.py)",
-        figures=(SATURATION_FIGURE, "pressure.png"),
+        figures=(SATURATION_FIGURE, "pressure.png", STRESS_FIGURE),
     ),
     Case(
         "four_charges",

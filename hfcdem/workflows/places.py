@@ -11,6 +11,7 @@ cracks, largest at the root).
 from __future__ import annotations
 
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import dolfinx
@@ -177,9 +178,23 @@ def plot_stress_along_tunnels(path: Any, profiles: Mapping[str, Any], title: str
         plt.close(fig)
 
 
+def plot_first_crack_stress(out: Path, scene: Scene, first: Mapping[str, Any] | None) -> None:
+    """Draw ``out``/sigma_xx.png from a summary's first crack (nothing without its profile).
+
+    Not collective: call it on one rank.
+    """
+    first = first or {}
+    profile = first.get("sigma_xx")
+    if profile:
+        mesh = f"{scene.resolution or 'default'} mesh"
+        title = f"{scene.name} ({mesh}): the tunnel at the first crack, {first['time_s']:.3g} s"
+        plot_stress_along_tunnels(out / STRESS_FIGURE, {scene.name: profile}, title)
+
+
 __all__ = [
     "COMPONENTS",
     "STRESS_FIGURE",
+    "plot_first_crack_stress",
     "plot_stress_along_tunnels",
     "stress_along_tunnels",
     "tunnel_length",

@@ -58,8 +58,7 @@ from hfcdem.workflows.observers import (
     mesh_fingerprint,
 )
 from hfcdem.workflows.places import (
-    STRESS_FIGURE,
-    plot_stress_along_tunnels,
+    plot_first_crack_stress,
     stress_along_tunnels,
     tunnel_place,
     wellbore_place,
@@ -330,12 +329,8 @@ def _run_coupled(
         _plot_pressure(out / "pressure.png", times, pressures, found, scene.name)
     if phys.pictures:
         _picture_fracture(out / "fracture.png", scene, frac)
-    where = first.where or {}
-    profile = where.get("sigma_xx")
-    if profile and comm.rank == 0:
-        mesh = f"{scene.resolution or 'default'} mesh"
-        title = f"{scene.name} ({mesh}): the tunnel at the first crack, {where['time_s']:.3g} s"
-        plot_stress_along_tunnels(out / STRESS_FIGURE, {scene.name: profile}, title)
+    if comm.rank == 0:
+        plot_first_crack_stress(out, scene, first.where)
     comm.barrier()
     return summary
 

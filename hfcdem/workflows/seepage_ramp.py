@@ -49,6 +49,11 @@ from hfcdem.io.files import write_csv, write_interfaces, write_json
 from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import InterfaceFrames
 from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.workflows.places import (
+    plot_first_crack_stress,
+    stress_along_tunnels,
+    wellbore_place,
+)
 
 _MODES = {1: "tensile", 2: "shear"}
 
@@ -187,6 +192,7 @@ def run_seepage_ramp(
         plot_lines(
             out / "pressure.png", curves, "time (s)", "pressure (MPa)", scene.name, MPI.COMM_SELF
         )
+        plot_first_crack_stress(out, scene, summary["first_crack"])
     comm.barrier()
     if result.stopped:
         pass
@@ -222,17 +228,20 @@ def _joint_fields(
 
 
 def _first_crack(
-    scene: Scene, location: np.ndarray | None, mode: int | None
+    scene: Scene,
+    location: np.ndarray | None,
+    mode: int | None,
+    stress: dict[str, Any] | None = None,
 ) -> dict[str, Any] | None:
-    """Return the summary's first crack: its point in 3D coordinates (m), its mode and place."""
-    from hfcdem.workflows.places import wellbore_place
+    """Return the summary's first crack: its point in 3D coordinates (m), its mode and place.
 
+    ``stress``: the stress along the tunnels then (``time_s``, ``sigma_xx``), if measured.
+    """
     if location is None:
         return None
     point = [*map(float, location), *([0.0] * (3 - len(location)))]
-    return {"point_m": point, "mode": _MODES.get(int(mode or 0), "intact")} | wellbore_place(
-        scene, np.asarray(point)
-    )
+    where = {"point_m": point, "mode": _MODES.get(int(mode or 0), "intact")}
+    return where | wellbore_place(scene, np.asarray(point)) | (stress or {})
 
 
 def _run_pumped(
@@ -255,6 +264,13 @@ def _run_pumped(
     def frame(t: float, pressure: np.ndarray, saturation: np.ndarray) -> None:
         series.offer(t, *_joint_fields(solid, pressure, saturation))
 
+    stress: dict[str, Any] = {}
+
+    def at_first_break(t: float) -> None:
+        profile = stress_along_tunnels(scene, solid) if solid.gdim == 3 else None
+        if profile:
+            stress.update(time_s=t, sigma_xx=profile)
+
     result = pump_with_seepage(
         solid,
         cavity,
@@ -264,6 +280,7 @@ def _run_pumped(
         progress=say,
         frames=frame,
         supports=supports,
+        at_first_break=at_first_break,
     )
     if result.stopped:
         say(f"stopped: {result.stopped}")
@@ -294,7 +311,7 @@ def _run_pumped(
         "breakdown_note": _pumping_note(result),
         "first_crack_pressure_MPa": first / 1e6 if first is not None else None,
         "first_crack_time_s": result.first_time,
-        "first_crack": _first_crack(scene, location, result.first_mode),
+        "first_crack": _first_crack(scene, location, result.first_mode, stress),
         "tensile_failures": result.tensile,
         "shear_failures": result.shear,
         "fracture_degree": solid.fracture_degree(),
@@ -329,6 +346,7 @@ def _run_pumped(
         plot_lines(
             out / "pressure.png", curves, "time (s)", "pressure (MPa)", scene.name, MPI.COMM_SELF
         )
+        plot_first_crack_stress(out, scene, summary["first_crack"])
     comm.barrier()
     if first is not None:
         say(
