@@ -166,7 +166,10 @@ def plot_stress_along_tunnels(path: Any, profiles: Mapping[str, Any], title: str
                 ax.axvspan(k * length / 3, (k + 1) * length / 3, color="0.93", zorder=0)
             ax.text((k + 0.5) * length / 3, 0.02, name, transform=ax.get_xaxis_transform(),
                     ha="center", fontsize=8, color="grey")  # fmt: skip
-        ax.axhline(0.0, color="k", lw=0.6)
+        ax.axhline(0.0, color="k", lw=0.6)  # tension above
+        if len(profiles) > 1:
+            fig.text(0.01, 0.01, "shaded: the thirds of the longest tunnel", fontsize=7,
+                     color="grey")  # fmt: skip
         component = next(iter(profiles.values()))["component"].replace("sigma_", "")
         ax.set_xlabel("distance from the wellbore wall (mm)")
         ax.set_ylabel(f"total sigma_{component} (MPa, tension positive)")
