@@ -176,7 +176,7 @@ def plot_stress_along_tunnels(path: Any, profiles: Mapping[str, Any], title: str
         ax.set_title(title, fontsize=9)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-        fig.tight_layout()
+        fig.tight_layout(rect=(0, 0.03, 1, 1))
         fig.savefig(path, dpi=120)
         plt.close(fig)
 
