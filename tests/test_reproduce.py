@@ -19,6 +19,7 @@ from hfcdem.reproduce.compare import (
     failure_modes,
     first_cracks,
     four_charges,
+    peak_against,
     shape_degrees,
     stress_at_root,
     stresses_at_roots,
@@ -234,6 +235,11 @@ def test_sigma_xx_at_the_first_crack_against_the_papers_root(tmp_path):
     compressed_root = _profile(-5.0, "root", [-5.0] * 6)  # at the root, but not in tension
     assert stress_at_root({"first_crack": {"sigma_xx": compressed_root}})[0].met is False
     assert stress_at_root({"first_crack": {"place": "root"}}) == []  # a run from before
+    summary = {"peak_pressure_MPa": 64.0, "first_crack": {"sigma_xx": hot}}
+    field = peak_against("p", 43.0, "s", 0.1)(CaseResult(tmp_path, (), summary=summary))
+    assert [r.quantity for r in field] == ["p"]  # a scene whose tunnels do not run along x
+    no2 = peak_against("p", 64.0, "s", 0.05, stress=True)(CaseResult(tmp_path, (), summary=summary))
+    assert [r.quantity for r in no2] == ["p", "largest sigma_xx at the first crack"]
 
     rows = ({"value": "no1", "first_crack": {"sigma_xx": hot}}, {"value": "no2"})
     (row,) = stresses_at_roots(CaseResult(tmp_path, (), rows=rows))

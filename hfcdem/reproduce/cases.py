@@ -345,6 +345,7 @@ CASES: tuple[Case, ...] = (
             "the paper's CDEM (Fig. 15)",
             0.05,
             "calibrated film, start and duration (scene file)",
+            stress=True,
         ),
         discretisation="coarse -> default moves the first crack from 61.64 to 58.05 MPa (-5.8 %) "
         "and from the middle (122.5 mm) to the far end (182 mm), further from the root "

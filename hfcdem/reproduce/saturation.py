@@ -127,6 +127,7 @@ def saturation_in_time(r: CaseResult) -> list[Comparison]:
         0.05,
         "no knob of the joints' fluid (water, 1 um joints from dry, no wall film); "
         "the start pressure is the scene's",
+        stress=True,
     )(r)
     history = r.directory / "history.csv"
     if history.exists():
