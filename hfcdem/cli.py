@@ -89,7 +89,10 @@ def _mesh(args: argparse.Namespace) -> int:
 
 
 def _overrides(items: list[str] | None) -> dict[str, object]:
-    """Parse ``KEY=VALUE`` pairs; VALUE is a TOML value, or else taken as a string."""
+    """Parse ``KEY=VALUE`` pairs; VALUE is a TOML value, or else taken as a string.
+
+    An empty VALUE (``KEY=``) removes the field, so its default applies.
+    """
     import tomllib
 
     from hfcdem.config.tables import SceneError
@@ -99,6 +102,9 @@ def _overrides(items: list[str] | None) -> dict[str, object]:
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
             raise SceneError("--set", f"expected KEY=VALUE, got {item!r}")
+        if not value.strip():
+            out[key.strip()] = None  # removed: the default applies
+            continue
         try:
             out[key.strip()] = tomllib.loads(f"v = {value}")["v"]
         except tomllib.TOMLDecodeError:
@@ -321,7 +327,8 @@ def _add_run(sub: Any) -> None:
         "--set",
         action="append",
         metavar="KEY=VALUE",
-        help="replace a scene field, e.g. --set injection.duration='120 s' (repeatable)",
+        help="replace a scene field, e.g. --set injection.duration='120 s'; KEY= removes it "
+        "(repeatable)",
     )
     run.set_defaults(func=_run)
 
@@ -356,7 +363,10 @@ def _add_study(sub: Any) -> None:
     )
     study.add_argument("--resolution", help="the mesh resolution of every case (not swept)")
     study.add_argument(
-        "--set", action="append", metavar="KEY=VALUE", help="fix a scene field in every case"
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="fix a scene field in every case (KEY= removes it)",
     )
     study.add_argument(
         "--groups", type=int, default=1, help="run this many cases at once (ranks split evenly)"

@@ -63,3 +63,15 @@ def test_petsc_options_on_the_command_line_reach_the_options_database():
     finally:
         db.delValue("hfcdem_cli_test_value")
         db.delValue("hfcdem_cli_test_flag")
+
+
+def test_set_with_an_empty_value_removes_the_field_so_its_default_applies():
+    from hfcdem.cli import _overrides
+    from hfcdem.config.scene import load_scene
+
+    sets = _overrides(["injection.wall_film=", "injection.wall_joints=seepage", "a.b='1 s'"])
+    assert sets == {"injection.wall_film": None, "injection.wall_joints": "seepage", "a.b": "1 s"}
+    no2 = "meshes/scenes/perforation_no2.toml"
+    assert load_scene(no2).physics.wall_film == pytest.approx(5e-6)
+    scene = load_scene(no2, overrides={"injection.wall_film": None})
+    assert scene.physics.wall_film is None
