@@ -348,8 +348,10 @@ CASES: tuple[Case, ...] = (
             stress=True,
         ),
         discretisation="coarse -> default moves the first crack from 61.64 to 58.05 MPa (-5.8 %) "
-        "and from the middle (122.5 mm) to the far end (182 mm), further from the root "
-        "(benchmarks/README.md, 2026-12-04); the breakdown at default is not measured",
+        "and from the middle (122.5 mm) to the far end (182 mm), further from the root, and "
+        "the largest sigma_xx of the root's third then from -70.3 to -68.0 MPa, no cell in "
+        "tension at either (benchmarks/README.md, 2026-12-04); the breakdown at default is "
+        "not measured",
         figures=("pressure.png", "fracture.png", STRESS_FIGURE),
     ),
     Case(
