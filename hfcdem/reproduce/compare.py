@@ -20,7 +20,12 @@ import numpy as np
 from hfcdem import references
 from hfcdem.analytic import kgd_viscosity
 from hfcdem.config.geometry import Scene
-from hfcdem.workflows.places import STRESS_FIGURE, plot_stress_along_tunnels
+from hfcdem.workflows.places import (
+    STRESS_FIGURE,
+    plot_stress_along_tunnels,
+    tunnel_length,
+    tunnel_place,
+)
 
 
 @dataclass(frozen=True)
@@ -556,6 +561,11 @@ def _stress_text(profile: Mapping[str, Any]) -> str:
     )
 
 
+def _hot_root(profile: Mapping[str, Any]) -> bool:
+    """Whether a profile's largest stress is at the root and in tension (the paper's Fig. 18)."""
+    return bool(profile.get("peak_place") == "root" and profile["peak_MPa"] > 0)
+
+
 def stress_at_root(s: Mapping[str, Any]) -> list[Comparison]:
     """Where a run's sigma_xx is largest at its first crack, against the paper's root (Fig. 18)."""
     profile = (s.get("first_crack") or {}).get("sigma_xx")
@@ -564,7 +574,7 @@ def stress_at_root(s: Mapping[str, Any]) -> list[Comparison]:
     return [
         Comparison("largest sigma_xx at the first crack", profile["peak_MPa"], unit="MPa",
                    ours_text=_stress_text(profile), reference_text="at the root, in tension",
-                   agrees=profile.get("peak_place") == "root" and profile["peak_MPa"] > 0,
+                   agrees=_hot_root(profile),
                    source="the paper's Fig. 18 and sec. 4.4", note=_STRESS_NOTE)
     ]  # fmt: skip
 
@@ -582,7 +592,7 @@ def stresses_at_roots(r: CaseResult) -> list[Comparison]:
         r.directory / STRESS_FIGURE, profiles,
         f"sigma_xx along the tunnels at each first crack (the paper's Fig. 18){_mesh(r)}",
     )  # fmt: skip
-    hot = [p.get("peak_place") == "root" and p["peak_MPa"] > 0 for p in profiles.values()]
+    hot = [_hot_root(p) for p in profiles.values()]
     listed = "; ".join(f"{name}: {_stress_text(p)}" for name, p in profiles.items())
     return [
         Comparison("largest sigma_xx at the root, in tension, every charge", sum(hot),
@@ -616,11 +626,9 @@ def peak_against(
         ]  # fmt: skip
         first = s.get("first_crack") or {}
         where, place = first.get("distance_from_wellbore_wall_m"), first.get("place")
-        tunnels = getattr(r.scenes[0].geometry, "perforations", ()) if r.scenes else ()
-        if place is None and where is not None and tunnels:  # a summary from before places
-            from hfcdem.workflows.places import tunnel_place
-
-            place = tunnel_place(where, max(t.profile.stations[-1] for t in tunnels))
+        length = tunnel_length(r.scenes[0]) if r.scenes else None
+        if place is None and where is not None and length:  # a summary from before places
+            place = tunnel_place(where, length)
         if where is not None:
             rows.append(
                 Comparison("first crack place", where * 1e3,

@@ -90,18 +90,16 @@ def stress_along_tunnels(
     and the mean stress (MPa; None for an empty bin).  ``peak``: the largest
     stress of the zone, where it is and its place (:func:`wellbore_place`);
     ``tensile_cells``: how many of the ``cells`` are in tension.
-    Collective; None for a scene without tunnels.
+    Collective; None for a scene without tunnels or a 2D solid.
     """
-    length = tunnel_length(scene)
-    if length is None or getattr(scene.geometry, "wellbore", None) is None:
-        return None
     if component not in COMPONENTS:
         raise ValueError(f"component: expected one of {', '.join(COMPONENTS)}, got {component!r}")
+    length = tunnel_length(scene)
+    if length is None or getattr(scene.geometry, "wellbore", None) is None or solid.gdim != 3:
+        return None
     i, j = COMPONENTS[component]
     mesh, comm = solid.mesh, solid.comm
     tdim = mesh.topology.dim
-    if max(i, j) >= solid.gdim:
-        raise ValueError(f"component: {component!r} needs a 3D mesh")
     rock = solid.owned & ~solid.is_crack
     cells = np.unique(solid.cells[rock].ravel())
     cells = cells[(cells >= 0) & (cells < mesh.topology.index_map(tdim).size_local)]

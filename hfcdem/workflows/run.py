@@ -60,7 +60,6 @@ from hfcdem.workflows.observers import (
 from hfcdem.workflows.places import (
     plot_first_crack_stress,
     stress_along_tunnels,
-    tunnel_place,
     wellbore_place,
 )
 
@@ -526,7 +525,7 @@ def _first_crack(
     point = np.zeros(3)
     point[:width] = np.asarray(total)[:width] / count
     where = {"point_m": point.tolist(), "interfaces": count} | wellbore_place(scene, point)
-    profile = stress_along_tunnels(scene, solid) if stress and solid.gdim == 3 else None
+    profile = stress_along_tunnels(scene, solid) if stress else None
     return where | ({"time_s": t, "sigma_xx": profile} if profile else {})
 
 
@@ -565,7 +564,5 @@ __all__ = [
     "pressurised_groups",
     "run_scene",
     "scene_fingerprint",
-    "tunnel_place",
     "wall_area",
-    "wellbore_place",
 ]

@@ -192,7 +192,6 @@ def run_seepage_ramp(
         plot_lines(
             out / "pressure.png", curves, "time (s)", "pressure (MPa)", scene.name, MPI.COMM_SELF
         )
-        plot_first_crack_stress(out, scene, summary["first_crack"])
     comm.barrier()
     if result.stopped:
         pass
@@ -267,7 +266,7 @@ def _run_pumped(
     stress: dict[str, Any] = {}
 
     def at_first_break(t: float) -> None:
-        profile = stress_along_tunnels(scene, solid) if solid.gdim == 3 else None
+        profile = stress_along_tunnels(scene, solid)
         if profile:
             stress.update(time_s=t, sigma_xx=profile)
 
