@@ -165,6 +165,29 @@ def test_the_first_break_is_announced_once_in_its_step(plate):
     assert seen[0][0] == run.first_time and seen[0][1] >= 1
 
 
+def test_quiet_steps_grow_up_to_max_dt_and_breaks_go_back_to_the_base_step(plate):
+    """The sealed cavity's linear rise grows its steps; the breaks land where fixed ones do.
+
+    Before the first break the pressure rises on a line, so longer steps lose
+    nothing: the first break is the one of the fixed steps (both land on the
+    crossing), in fewer steps.  A step that breaks sends the next to the base step.
+    """
+    fixed = _pump(plate, 1e-9)
+    pumping = CavityPumping(Q, 40.0, steps=100, max_dt=1.6)
+    grown = pump_with_seepage(_solid(plate), WALL, Fluid(viscosity=1.0), 1e-9, pumping)
+    t = np.array([0.0] + [row[0] for row in grown.history])
+    dt = np.diff(t)
+    assert dt.max() == pytest.approx(1.6) and dt.max() <= 1.6 * (1.0 + 1e-12)
+    assert grown.steps < fixed.steps - 20
+    assert grown.first_pressure == pytest.approx(fixed.first_pressure, rel=1e-7)
+    assert grown.first_time == pytest.approx(fixed.first_time, rel=1e-6)
+    assert grown.breakdown == pytest.approx(fixed.breakdown, rel=1e-6)
+    broke = np.array([row[2] for row in grown.costs]) > 0
+    after = dt[1:][broke[:-1]]  # the steps after a break: the base step, or the run's end
+    assert np.all((after <= 0.4 * (1.0 + 1e-12)) | np.isclose(t[2:][broke[:-1]], 40.0))
+    assert grown.max_mass_error < 1e-9
+
+
 def test_a_pressure_that_only_falls_has_no_breakdown(plate):
     """Open joints take more than the pump delivers: the start is not a peak."""
     pumping = CavityPumping(Q / 100, 2.0, steps=10, initial_pressure=5e6)

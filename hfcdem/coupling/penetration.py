@@ -100,7 +100,9 @@ class CavityPumping:
     solve at a unit cavity pressure); the joints at its wall take their share
     each step, the cavity pressure being the one that balances the step's
     volume.  ``steps`` equal steps; ``initial_pressure`` in the cavity at t = 0
-    (the joints start dry).
+    (the joints start dry).  ``max_dt`` (s): the pumped run of
+    :mod:`hfcdem.coupling.pumping` may grow a quiet step up to it; None keeps
+    every step at :attr:`dt`.
     """
 
     rate: float
@@ -108,6 +110,7 @@ class CavityPumping:
     steps: int = 200
     initial_pressure: float = 0.0
     extra_volume: float = 0.0
+    max_dt: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("rate", "duration", "initial_pressure", "extra_volume"):
@@ -126,6 +129,10 @@ class CavityPumping:
         if not (isinstance(self.steps, int) and 1 <= self.steps <= 10**7):
             raise ValueError(
                 f"CavityPumping.steps must be an integer in [1, 1e7], got {self.steps!r}"
+            )
+        if self.max_dt is not None and not (math.isfinite(self.max_dt) and self.max_dt > 0.0):
+            raise ValueError(
+                f"CavityPumping.max_dt must be a finite time > 0 s or None, got {self.max_dt!r}"
             )
 
     @property

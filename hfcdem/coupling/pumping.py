@@ -62,6 +62,7 @@ from hfcdem.coupling.events import (
 )
 from hfcdem.coupling.groups import local_network
 from hfcdem.coupling.penetration import CavityPumping, illinois_root, settle_excavation
+from hfcdem.coupling.stepping import StepController
 from hfcdem.flow.apertures import JointAperture, network_apertures
 from hfcdem.flow.network import Network, gather_rows
 from hfcdem.flow.seepage import (
@@ -124,6 +125,14 @@ _PAST = 1e-6
 
 #: shortenings of one step to land on a crossing
 _MAX_LANDINGS = 3
+
+#: a step grows by half (up to ``CavityPumping.max_dt``) after one that broke nothing, was
+#: not shortened, and moved the cavity pressure as the last step's rate carried on would
+#: have, to this fraction of its change (linear in time: a longer step loses nothing) ...
+_GROWTH_LINEARITY = 0.1
+#: ... and the share of joints holding pressure by at most this much.  A step that broke
+#: goes back to the base step ``CavityPumping.dt``; one off the line shrinks by a third
+_GROWTH_WET = 0.01
 
 
 @dataclass(frozen=True)
@@ -205,10 +214,13 @@ def pump_with_seepage(
     :class:`~hfcdem.flow.apertures.JointAperture` that follows the mesh size;
     ``supports``: walls that hold the blocks cut loose against them (a cased
     wellbore's; :func:`~hfcdem.coupling.events.release_debris`).  Runs for
-    ``pumping.duration`` in ``pumping.steps`` steps (more where a step is
-    shortened onto a break).  ``frames`` is called (collectively) at the start
-    and after every step with the time and the fluid pressure and saturation
-    per local facet (:meth:`_PumpedCavity.fields`); ``at_first_break``
+    ``pumping.duration`` in steps of ``pumping.dt``, shortened onto a break
+    and, with ``pumping.max_dt``, grown by half after each quiet step up to
+    it (no break, the cavity pressure on the line of the last step's rate to
+    10 %, the share of joints holding pressure within 1 % of the last step's).
+    ``frames`` is called (collectively) at the start and after every step with
+    the time and the fluid pressure and saturation per local facet
+    (:meth:`_PumpedCavity.fields`); ``at_first_break``
     (collectively) with the time, after the step of the first break, when the
     solid holds that step's state.
     """
@@ -678,6 +690,11 @@ class _PumpedCavity:
             f"at t = {t + dt:.6g} s ({broken} facets broke in the step)"
         )
 
+    def _wet_share(self) -> float:
+        """Share of the network's joints holding pressure (the same on every rank)."""
+        pj = self.seep.pressure
+        return float(np.mean(pj > 0.0)) if pj.size else 0.0
+
     def _crossing(self, start: Loads, end: Loads, u_start: np.ndarray) -> float:
         """Fraction of the step at which an intact facet first fails (inf: none)."""
         solid = self.solid
@@ -714,11 +731,16 @@ class _PumpedCavity:
         every = max(1, pumping.steps // 10)
         if frames is not None:
             frames(t, *self.fields())
+        steps = StepController(
+            dt=pumping.dt, dt_min=pumping.dt, dt_max=max(pumping.max_dt or 0.0, pumping.dt)
+        )
+        rate: float | None = None  # the cavity pressure's rate over the last step (Pa/s)
         while t < pumping.duration * (1.0 - 1e-12):
-            dt = min(pumping.dt, pumping.duration - t)
+            steps.limit(pumping.duration - t)
+            tried, p_before, wet_before = steps.dt, self.p, self._wet_share()
             before = (solid.solves, self.rebalances, *self._factorisations(), time.perf_counter())
             try:
-                dt, broken, worst, top = self.step(t, dt, max_iterations)
+                dt, broken, worst, top = self.step(t, tried, max_iterations)
             except _Dry as stop:
                 stopped = str(stop)
                 break
@@ -726,6 +748,18 @@ class _PumpedCavity:
                 stopped, limit = str(stop), True
                 break
             t, n = t + dt, n + 1
+            change, last_rate = self.p - p_before, rate
+            rate = change / dt
+            if broken or dt < tried:
+                steps.retry_with(pumping.dt)  # breaks come in cascades: the base step again
+                rate = None
+            elif last_rate is not None:
+                off = abs(change - last_rate * dt)  # from the last step's rate carried on
+                linear = off <= _GROWTH_LINEARITY * max(abs(change), 1e-3 * max(p_before, 1e6))
+                if linear and abs(self._wet_share() - wet_before) <= _GROWTH_WET:
+                    steps.accepted(dt, changed=False, newton_iterations=0)
+                else:
+                    steps.retry_with(max(dt / steps.growth, pumping.dt))
             events = self._factorisations()
             costs.append(
                 (t, dt, broken, solid.solves - before[0], events[0] - before[2],
@@ -742,8 +776,7 @@ class _PumpedCavity:
             error = abs(held - self.m0 - pumping.rate * t) / (pumping.rate * t)
             self.worst = max(self.worst, error)
             counts = solid.broken_counts()
-            pj = self.seep.pressure
-            wet = float(np.mean(pj > 0.0)) if pj.size else 0.0
+            wet = self._wet_share()
             crack = self.crack_volume
             history.append(
                 (t, self.p, self.joint_content(), crack, counts["tensile"], counts["shear"], wet)

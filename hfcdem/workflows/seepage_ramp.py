@@ -86,8 +86,14 @@ def seepage_loading(scene: Scene) -> PressureRamp | CavityPumping:
                 "seepage runs store fluid in the cavity of the mesh (plus extra_volume) and "
                 "in the joints: drop wall_film",
             )
+        longest = phys.solver.max_time_step  # quiet stretches grow their steps up to it
         return CavityPumping(
-            points[0][1], phys.duration, steps, phys.initial_pressure, phys.extra_volume
+            points[0][1],
+            phys.duration,
+            steps,
+            phys.initial_pressure,
+            phys.extra_volume,
+            max_dt=longest if math.isfinite(longest) else None,
         )
     if inj is None or len(points) != 2 or points[0][0] != 0.0:
         raise SceneError(
