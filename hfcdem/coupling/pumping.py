@@ -731,13 +731,14 @@ class _PumpedCavity:
         every = max(1, pumping.steps // 10)
         if frames is not None:
             frames(t, *self.fields())
-        steps = StepController(
+        stepper = StepController(
             dt=pumping.dt, dt_min=pumping.dt, dt_max=max(pumping.max_dt or 0.0, pumping.dt)
         )
         rate: float | None = None  # the cavity pressure's rate over the last step (Pa/s)
+        wet = self._wet_share()
         while t < pumping.duration * (1.0 - 1e-12):
-            steps.limit(pumping.duration - t)
-            tried, p_before, wet_before = steps.dt, self.p, self._wet_share()
+            stepper.limit(pumping.duration - t)
+            tried, p_before, wet_before = stepper.dt, self.p, wet
             before = (solid.solves, self.rebalances, *self._factorisations(), time.perf_counter())
             try:
                 dt, broken, worst, top = self.step(t, tried, max_iterations)
@@ -749,17 +750,17 @@ class _PumpedCavity:
                 break
             t, n = t + dt, n + 1
             change, last_rate = self.p - p_before, rate
-            rate = change / dt
+            rate, wet = change / dt, self._wet_share()
             if broken or dt < tried:
-                steps.retry_with(pumping.dt)  # breaks come in cascades: the base step again
+                stepper.retry_with(pumping.dt)  # breaks come in cascades: the base step again
                 rate = None
             elif last_rate is not None:
                 off = abs(change - last_rate * dt)  # from the last step's rate carried on
                 linear = off <= _GROWTH_LINEARITY * max(abs(change), 1e-3 * max(p_before, 1e6))
-                if linear and abs(self._wet_share() - wet_before) <= _GROWTH_WET:
-                    steps.accepted(dt, changed=False, newton_iterations=0)
+                if linear and abs(wet - wet_before) <= _GROWTH_WET:
+                    stepper.accepted(dt, changed=False, newton_iterations=0)
                 else:
-                    steps.retry_with(max(dt / steps.growth, pumping.dt))
+                    stepper.retry_with(max(dt / stepper.growth, pumping.dt))
             events = self._factorisations()
             costs.append(
                 (t, dt, broken, solid.solves - before[0], events[0] - before[2],
@@ -776,7 +777,6 @@ class _PumpedCavity:
             error = abs(held - self.m0 - pumping.rate * t) / (pumping.rate * t)
             self.worst = max(self.worst, error)
             counts = solid.broken_counts()
-            wet = self._wet_share()
             crack = self.crack_volume
             history.append(
                 (t, self.p, self.joint_content(), crack, counts["tensile"], counts["shear"], wet)
