@@ -8,6 +8,7 @@ contact switches against the same solid refactorised at every event.
 import numpy as np
 import pytest
 import test_operator as kept
+import tiny_solid
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -72,15 +73,16 @@ def test_the_corrected_solve_equals_a_factorisation_of_the_changed_matrix():
     first = {(3, 3): 0.9, (4, 4): 0.9, (3, 4): -0.9, (4, 3): -0.9}
     second = {(30, 30): 5.0, (31, 31): 5.0, (30, 31): -5.0, (31, 30): -5.0, (3, 3): -0.5}
     K0 = chain()
-    correction = LowRankCorrection(factor(K0), max_columns=3)
+    correction = LowRankCorrection(factor(K0), max_columns=2)
     assert correction.add(change(first))
-    assert correction.rank == 2
-    # a second change past the cap is refused and leaves the correction as it was
+    assert correction.rank == 1  # a spring changes the stiffness of its jump only
+    # a second change past the cap (two new directions: the spring at 30 and row 3's
+    # part outside the first spring's range) is refused and leaves the correction as it was
     assert not correction.add(change(second))
-    assert correction.rank == 2
-    correction.max_columns = 4
+    assert correction.rank == 1
+    correction.max_columns = 3
     assert correction.add(change(second))
-    assert correction.rank == 4
+    assert correction.rank == 3
     both = {k: first.get(k, 0.0) + second.get(k, 0.0) for k in {*first, *second}}
     K1 = chain(both)
     x = solve(corrected_solver(correction, K1), K1)
@@ -88,6 +90,40 @@ def test_the_corrected_solve_equals_a_factorisation_of_the_changed_matrix():
     gap = comm.allreduce(float(np.abs(x - ref).max()), op=MPI.MAX)
     scale = comm.allreduce(float(np.abs(ref).max()), op=MPI.MAX)
     assert gap < 1e-14 * scale
+
+
+def test_a_change_inside_the_range_held_adds_no_column():
+    """A spring cut, then half restored (a contact closing on a broken facet)."""
+    cut = {(3, 3): -0.9, (4, 4): -0.9, (3, 4): 0.9, (4, 3): 0.9}
+    back = {k: -0.5 * v for k, v in cut.items()}
+    correction = LowRankCorrection(factor(chain()), max_columns=1)
+    assert correction.add(change(cut))
+    assert correction.add(change(back))  # a new direction would pass the cap
+    assert correction.rank == 1
+    both = {k: cut[k] + back[k] for k in cut}
+    K1 = chain(both)
+    x = solve(corrected_solver(correction, K1), K1)
+    ref = solve(factor(chain(both)), K1)
+    gap = comm.allreduce(float(np.abs(x - ref).max()), op=MPI.MAX)
+    assert gap < 1e-14 * comm.allreduce(float(np.abs(ref).max()), op=MPI.MAX)
+
+
+@pytest.mark.parametrize("residual, taken", [(1e-3, True), (1e-12, False)])
+def test_a_change_that_leaves_an_unknown_held_by_a_residual_spring_only_is_refused(residual, taken):
+    """The last unknown cut off from the chain but for ``residual`` of its stiffness."""
+    last = N - 1
+    own = 3.0 + 0.1 * last
+    cut = {(last, last): -own + residual, (last - 1, last): 1.0, (last, last - 1): 1.0}
+    cut[(last - 1, last - 1)] = -1.0
+    correction = LowRankCorrection(factor(chain()), max_columns=10)
+    assert correction.add(change(cut)) is taken
+    assert correction.rank == (2 if taken else 0)
+    if taken:
+        K1 = chain(cut)
+        x = solve(corrected_solver(correction, K1), K1)
+        ref = solve(factor(chain(cut)), K1)
+        gap = comm.allreduce(float(np.abs(x - ref).max()), op=MPI.MAX)
+        assert gap < 1e-13 * comm.allreduce(float(np.abs(ref).max()), op=MPI.MAX)
 
 
 def events(solid, step, contact):
@@ -98,7 +134,7 @@ def events(solid, step, contact):
 
 
 @pytest.mark.parametrize("mode", ["full", "reduced"])
-@pytest.mark.parametrize("columns", [1000, 40])
+@pytest.mark.parametrize("columns", [1000, 20])
 def test_events_as_a_correction_equal_refactorising(mode, columns):
     """Breaks and contact switches: the same displacement as refactorising at each."""
     loads = Loads(cavity={"right": 3 * MPa}, crack_pressure=12 * MPa)
@@ -122,6 +158,23 @@ def test_events_as_a_correction_equal_refactorising(mode, columns):
     # past the cap the changes go into the factor: a numeric refactorisation
     assert counts["updated"] == 0 if columns == 1000 else counts["updated"] >= 1
     assert counts["low_rank"] >= 1
+
+
+def test_a_broken_facet_costs_the_columns_of_its_jump_and_a_contact_switch_none():
+    """3D DG1: a facet's springs act on its jump, 9 numbers of its 18 unknowns."""
+    solid = kept.block("full", tiny_solid.unit_block(3), low_rank_columns=1000)
+    loads = Loads(cavity={"right": 3 * MPa})
+    solid.solve(loads)
+    one = kept.some_interfaces(solid, 1, 0)
+    solid.break_facets(one, np.ones(len(one), dtype=np.int8), 0.0)
+    solid.solve(loads)
+    assert solid.operator.low_rank_columns == 9
+    for contact in (STICK, SLIP, OPEN):
+        solid.states.contact[one] = contact
+        solid.sync_ghost_states()
+        solid.solve(loads)
+        assert solid.operator.low_rank_columns == 9
+    assert solid.operator.counts["low_rank"] == 4
 
 
 def test_several_right_hand_sides_through_the_correction():

@@ -80,7 +80,7 @@ from hfcdem.solvers import (
 # (1.2M) would need 22.7 GB (benchmarks/README.md)
 AUTO_DIRECT_MAX_DOFS = 600_000
 # a direct solver takes interface events as a low-rank correction of its factor for
-# up to this many changed unknowns (18 per 3D DG1 facet), and for no more than
+# up to this many columns (9 per 3D DG1 facet: its jump), and for no more than
 # LOW_RANK_BYTES of correction columns over all ranks; PETSc option
 # -hfcdem_cdem_low_rank_columns overrides (0: refactorise at every event)
 LOW_RANK_COLUMNS = 256

@@ -1,9 +1,11 @@
 """Interface events as low-rank changes of a kept factorisation (Woodbury).
 
 An interface event changes the stiffness only in the rows and columns of the
-changed facets' unknowns (18 per facet for DG1 in 3D): ``K = K0 + E D E^T``,
-with ``E`` the selection of those ``r`` unknowns and ``D`` the ``r x r``
-change.  With ``Z = K0^-1 E`` and ``S = E^T Z``,
+changed facets' unknowns (18 per facet for DG1 in 3D), and there only through
+the jump of the displacement across the facet (9 numbers for DG1 in 3D):
+``K = K0 + E D E^T``, with ``E`` an ``n x r`` basis of the changes' range
+(orthonormal, non-zero on the changed unknowns only) and ``D`` the ``r x r``
+change in it.  With ``Z = K0^-1 E`` and ``S = E^T Z``,
 
     K^-1 b = y - Z (I + D S)^-1 D E^T y,    y = K0^-1 b,
 
@@ -11,8 +13,18 @@ so the factor of ``K0`` serves the solves after any number of events: an
 event costs the new columns of ``Z`` (one MUMPS solve with several right-hand
 sides) instead of a numeric refactorisation, and a solve costs a second
 back-substitution (one step of iterative refinement) and ``n x r`` products.
-At No. 2's default mesh a numeric refactorisation takes 15-19 s, the columns
-of one facet about 1 s (benchmarks/README.md).
+A change is compressed to its range (an eigen-decomposition of its dense
+block) before it adds columns, and a change inside the range already held (a
+contact switch of a facet that broke since the factorisation) adds none: a
+spring facet costs 9 columns, not 18.  At No. 2's default mesh a numeric
+refactorisation takes 15-19 s, the columns of one facet about 0.5 s
+(benchmarks/README.md).
+
+The compression is exact to round-off of the change (1e-16 of it).  Where the
+changed matrix is near singular, a block left held by residual springs only,
+that round-off swamps the little stiffness that holds it; since
+``det K = det K0 det (I + D S)``, such a change shows as an ill-conditioned
+``I + D S`` and is refused, and the caller refactorises exactly.
 
 :class:`LowRankCorrection` keeps ``E``, ``Z``, ``S`` and ``D``;
 :func:`corrected_solver` wraps it in a KSP (``preonly`` with a Python PC), so
@@ -20,6 +32,8 @@ callers solve through it as through the factor itself.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from mpi4py import MPI
@@ -29,14 +43,25 @@ from hfcdem.solvers import check_ksp, dense_rows, solve_columns
 
 # columns of Z solved together: MUMPS's dense right-hand side is n x this
 _COLUMN_BATCH = 32
+# an eigenvalue of a change below this share of its largest is round-off
+_RANGE_TOLERANCE = 1e-13
+# the corrected matrix's conditioning relative to the factor's past which the caller
+# refactorises: 1e-8 of a spring's stiffness is left where residual springs hold a block
+_MAX_CONDITION = 1e8
+# a change adds at least this share of its new unknowns as columns (9 of 18 for a 3D
+# spring facet); a change that would pass the cap even so is refused before any work
+_LEAST_RANK_SHARE = 1 / 3
+# a direction of the change's range (unit length) with less than this outside the basis
+# held lies in it (a contact switch of a facet broken since the factorisation)
+_OUTSIDE_TOLERANCE = 1e-10
 
 
 class LowRankCorrection:
     """The change ``E D E^T`` added to a factorised ``K0`` since its factorisation.
 
     ``factor`` is a set-up direct KSP of ``K0``, kept unchanged; at most
-    ``max_columns`` unknowns (the rank ``r``) may change before :meth:`add`
-    refuses and the caller refactorises.
+    ``max_columns`` columns of ``E`` (the rank ``r``) may be held before
+    :meth:`add` refuses and the caller refactorises.
     """
 
     def __init__(self, factor: PETSc.KSP, max_columns: int) -> None:
@@ -45,15 +70,16 @@ class LowRankCorrection:
         A0 = factor.getOperators()[0]
         self.comm: MPI.Comm = A0.getComm().tompi4py()
         self.lo, self.hi = A0.getOwnershipRange()
-        self.rows = np.zeros(0, dtype=np.int64)  # E: global indices, the same on every rank
+        self.rows = np.zeros(0, dtype=np.int64)  # changed unknowns (global), the same on every rank
+        self.E = np.zeros((0, 0))  # the basis on those rows: E's non-zero rows, orthonormal columns
         self.Z = np.zeros((self.hi - self.lo, 0))  # this rank's rows of K0^-1 E
         self.D = np.zeros((0, 0))
         self.M = np.zeros((0, 0))  # I + D S
 
     @property
     def rank(self) -> int:
-        """The number ``r`` of unknowns changed since the factorisation."""
-        return len(self.rows)
+        """The number ``r`` of columns of ``E`` held since the factorisation."""
+        return self.E.shape[1]
 
     def _gather(self, local: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """Gather the rows ``rows`` (global) of a distributed block onto every rank."""
@@ -62,45 +88,74 @@ class LowRankCorrection:
         part[mine] = local[rows[mine] - self.lo]
         return self.comm.allreduce(part, op=MPI.SUM)
 
-    def add(self, dK: PETSc.Mat) -> bool:
-        """Add the change ``dK`` (collective); False, adding nothing, if ``r`` passes the cap."""
+    def _entries(self, dK: PETSc.Mat) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Global row, column and value of this rank's non-zeros of ``dK``."""
         indptr, cols, vals = dK.getValuesCSR()
         hit = vals != 0.0
         rows = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))[hit] + self.lo
-        cols = cols[hit].astype(np.int64)
-        touched = np.union1d(rows, cols)
-        touched = np.unique(np.concatenate(self.comm.allgather(touched)))
-        new = np.setdiff1d(touched, self.rows)
-        if self.rank + len(new) > self.max_columns:
+        return rows, cols[hit].astype(np.int64), vals[hit]
+
+    def add(self, dK: PETSc.Mat) -> bool:
+        """Add the symmetric change ``dK`` (collective); False, adding nothing, if refused.
+
+        Refused past the cap on columns, and where the changed matrix is near
+        singular (the module docstring).
+        """
+        rows, cols, vals = self._entries(dK)
+        touched = np.unique(np.concatenate(self.comm.allgather(np.union1d(rows, cols))))
+        new_rows = np.setdiff1d(touched, self.rows)
+        if self.rank + math.ceil(_LEAST_RANK_SHARE * len(new_rows)) > self.max_columns:
             return False
-        if len(new):
+        rows_all = np.concatenate([self.rows, new_rows])
+        order = np.argsort(rows_all)
+        at = order[np.searchsorted(rows_all[order], touched)]  # touched rows in rows_all
+        # the change's range: it lives on the touched rows, so eigen-decompose that block
+        C = np.zeros((len(touched), len(touched)))
+        np.add.at(C, (np.searchsorted(touched, rows), np.searchsorted(touched, cols)), vals)
+        C = self.comm.allreduce(C, op=MPI.SUM)
+        w, V = np.linalg.eigh(C)
+        keep = np.abs(w) > _RANGE_TOLERANCE * np.abs(w).max(initial=0.0)
+        U = np.zeros((len(rows_all), int(keep.sum())))
+        U[at] = V[:, keep]
+        E = np.zeros((len(rows_all), self.rank))
+        E[: len(self.rows)] = self.E
+        # the part of that range outside the basis held: new columns
+        u, sv, _ = np.linalg.svd(U - E @ (E.T @ U), full_matrices=False)
+        N = u[:, sv > _OUTSIDE_TOLERANCE]
+        if self.rank + N.shape[1] > self.max_columns:
+            return False
+        if N.shape[1]:
+            N -= E @ (E.T @ N)  # once more against the basis: orthogonal to round-off
+            N, _ = np.linalg.qr(N)
+        Z = self.Z
+        if N.shape[1]:
             columns = []
-            for start in range(0, len(new), _COLUMN_BATCH):
-                part = new[start : start + _COLUMN_BATCH]
-                block = np.zeros((self.hi - self.lo, len(part)))
-                mine = (part >= self.lo) & (part < self.hi)
-                block[part[mine] - self.lo, np.flatnonzero(mine)] = 1.0
+            mine = (rows_all >= self.lo) & (rows_all < self.hi)
+            for start in range(0, N.shape[1], _COLUMN_BATCH):
+                part = N[:, start : start + _COLUMN_BATCH]
+                block = np.zeros((self.hi - self.lo, part.shape[1]))
+                block[rows_all[mine] - self.lo] = part[mine]
                 columns.append(solve_columns(self.factor, block))
             check_ksp(self.factor, "low-rank columns of the CDEM stiffness")
-            self.Z = np.hstack([self.Z, *columns])
-            self.rows = np.concatenate([self.rows, new])
-            D = np.zeros((self.rank, self.rank))
-            D[: len(self.D), : len(self.D)] = self.D
-            self.D = D
-        order = np.argsort(self.rows)
-        where = order[np.searchsorted(self.rows[order], rows)]
-        part = np.zeros_like(self.D)
-        np.add.at(part, (where, order[np.searchsorted(self.rows[order], cols)]), vals[hit])
-        self.D += self.comm.allreduce(part, op=MPI.SUM)
-        S = self._gather(self.Z, self.rows)
-        self.M = np.eye(self.rank) + self.D @ S
+            Z = np.hstack([Z, *columns])
+            E = np.hstack([E, N])
+        D = np.zeros((E.shape[1], E.shape[1]))
+        D[: len(self.D), : len(self.D)] = self.D
+        D += E[at].T @ C @ E[at]
+        M = np.eye(E.shape[1]) + D @ (E.T @ self._gather(Z, rows_all))
+        # det K = det K0 det M: a near-singular M is a near-singular K (a block held by
+        # residual springs only), whose solution the compression's round-off (about 1e-16
+        # of the change) would swamp; the caller refactorises it exactly instead
+        if np.linalg.cond(M) > _MAX_CONDITION:
+            return False
+        self.rows, self.E, self.Z, self.D, self.M = rows_all, E, Z, D, M
         return True
 
     def correct(self, y: np.ndarray) -> None:
         """Turn ``y = K0^-1 b`` (this rank's rows, a column per right-hand side) into ``K^-1 b``."""
         if self.rank == 0:
             return
-        c = np.linalg.solve(self.M, self.D @ self._gather(y, self.rows))
+        c = np.linalg.solve(self.M, self.D @ (self.E.T @ self._gather(y, self.rows)))
         y -= self.Z @ c
 
 

@@ -8,7 +8,7 @@ redoes only its numeric factorisation (no ordering, no symbolic analysis).
 
 With a direct solver and ``max_columns > 0`` an event does not even
 refactorise: the change joins a low-rank (Woodbury) correction of the kept
-factor (:mod:`hfcdem.solid.lowrank`) until ``max_columns`` unknowns have
+factor (:mod:`hfcdem.solid.lowrank`) until ``max_columns`` columns have
 changed; then the changes are added to the factorised matrix and it is
 refactorised numerically.
 
@@ -69,6 +69,11 @@ class StiffnessOperator:
         self._updates = 0
         self.counts = {"assembled": 0, "updated": 0, "unchanged": 0, "low_rank": 0}
         self.seconds = {"assemble": 0.0, "update": 0.0, "factorise": 0.0, "low_rank": 0.0}
+
+    @property
+    def low_rank_columns(self) -> int:
+        """Columns of the low-rank correction held now (0 right after a factorisation)."""
+        return 0 if self._correction is None else self._correction.rank
 
     def solver(self, values: np.ndarray, key: Hashable, reduce: Reduce | None) -> PETSc.KSP:
         """Return the factorised KSP of the interfaces' integrals ``values`` (collective).
