@@ -124,11 +124,10 @@ class LowRankCorrection:
         N = u[:, sv > _OUTSIDE_TOLERANCE]
         if self.rank + N.shape[1] > self.max_columns:
             return False
+        Z = self.Z
         if N.shape[1]:
             N -= E @ (E.T @ N)  # once more against the basis: orthogonal to round-off
             N, _ = np.linalg.qr(N)
-        Z = self.Z
-        if N.shape[1]:
             columns = []
             mine = (rows_all >= self.lo) & (rows_all < self.hi)
             for start in range(0, N.shape[1], _COLUMN_BATCH):
