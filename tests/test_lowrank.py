@@ -118,6 +118,7 @@ def test_a_change_that_leaves_an_unknown_held_by_a_residual_spring_only_is_refus
     correction = LowRankCorrection(factor(chain()), max_columns=10)
     assert correction.add(change(cut)) is taken
     assert correction.rank == (2 if taken else 0)
+    assert correction.refused == ("" if taken else "condition")
     if taken:
         K1 = chain(cut)
         x = solve(corrected_solver(correction, K1), K1)
@@ -158,6 +159,8 @@ def test_events_as_a_correction_equal_refactorising(mode, columns):
     # past the cap the changes go into the factor: a numeric refactorisation
     assert counts["updated"] == 0 if columns == 1000 else counts["updated"] >= 1
     assert counts["low_rank"] >= 1
+    # a refactorisation past the cap says so (near-singular changes: none in this block)
+    assert low.operator.refusals == {"cap": counts["updated"], "condition": 0}
 
 
 def test_a_broken_facet_costs_the_columns_of_its_jump_and_a_contact_switch_none():
@@ -175,6 +178,9 @@ def test_a_broken_facet_costs_the_columns_of_its_jump_and_a_contact_switch_none(
         solid.solve(loads)
         assert solid.operator.low_rank_columns == 9
     assert solid.operator.counts["low_rank"] == 4
+    stats = solid.operator.statistics()  # what summary.json reports
+    assert stats["columns"] == 9 and stats["updated"] == 0
+    assert set(stats["seconds"]) == {"assemble", "update", "factorise", "low_rank"}
 
 
 def test_several_right_hand_sides_through_the_correction():

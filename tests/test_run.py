@@ -76,6 +76,10 @@ def test_borehole_scene_breaks_at_the_wall_near_hubbert_willis(shared_tmp_path):
     causes = summary["rebuild_causes"]
     assert sum(causes.values()) == summary["rebuilds"]
     assert causes["start"] == 1 and causes["break"] >= 1
+    # every rebuild after the start reached the solid's operator: a change or a factorisation
+    op = summary["solid_operator"]
+    assert op["assembled"] >= 1
+    assert op["assembled"] + op["updated"] + op["low_rank"] + op["unchanged"] >= summary["rebuilds"]
 
 
 def test_the_reduced_solid_reproduces_the_full_borehole_run(shared_tmp_path):

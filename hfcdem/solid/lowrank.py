@@ -72,14 +72,35 @@ class LowRankCorrection:
         self.lo, self.hi = A0.getOwnershipRange()
         self.rows = np.zeros(0, dtype=np.int64)  # changed unknowns (global), the same on every rank
         self.E = np.zeros((0, 0))  # the basis on those rows: E's non-zero rows, orthonormal columns
-        self.Z = np.zeros((self.hi - self.lo, 0))  # this rank's rows of K0^-1 E
+        # this rank's rows of K0^-1 E: the first ``rank`` columns of a buffer that grows by
+        # doubling (an event copies only its new columns, not the n x r held)
+        self._Z = np.zeros((self.hi - self.lo, 0))
         self.D = np.zeros((0, 0))
         self.M = np.zeros((0, 0))  # I + D S
+        self.refused = ""  # why the last refused change was: "cap" or "condition"
 
     @property
     def rank(self) -> int:
         """The number ``r`` of columns of ``E`` held since the factorisation."""
         return self.E.shape[1]
+
+    @property
+    def Z(self) -> np.ndarray:
+        """Rows of ``K0^-1 E`` on this rank (a view)."""
+        return self._Z[:, : self.rank]
+
+    def _append_columns(self, columns: list[np.ndarray]) -> None:
+        """Store new columns of ``Z`` after the ``rank`` held (``E`` grows after)."""
+        start = self.rank
+        end = start + sum(c.shape[1] for c in columns)
+        if end > self._Z.shape[1]:
+            capacity = min(self.max_columns, max(end, 2 * self._Z.shape[1], _COLUMN_BATCH))
+            grown = np.empty((self._Z.shape[0], capacity))
+            grown[:, :start] = self._Z[:, :start]
+            self._Z = grown
+        for c in columns:
+            self._Z[:, start : start + c.shape[1]] = c
+            start += c.shape[1]
 
     def _gather(self, local: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """Gather the rows ``rows`` (global) of a distributed block onto every rank."""
@@ -105,6 +126,7 @@ class LowRankCorrection:
         touched = np.unique(np.concatenate(self.comm.allgather(np.union1d(rows, cols))))
         new_rows = np.setdiff1d(touched, self.rows)
         if self.rank + math.ceil(_LEAST_RANK_SHARE * len(new_rows)) > self.max_columns:
+            self.refused = "cap"
             return False
         rows_all = np.concatenate([self.rows, new_rows])
         order = np.argsort(rows_all)
@@ -123,8 +145,8 @@ class LowRankCorrection:
         u, sv, _ = np.linalg.svd(U - E @ (E.T @ U), full_matrices=False)
         N = u[:, sv > _OUTSIDE_TOLERANCE]
         if self.rank + N.shape[1] > self.max_columns:
+            self.refused = "cap"
             return False
-        Z = self.Z
         if N.shape[1]:
             N -= E @ (E.T @ N)  # once more against the basis: orthogonal to round-off
             N, _ = np.linalg.qr(N)
@@ -136,18 +158,21 @@ class LowRankCorrection:
                 block[rows_all[mine] - self.lo] = part[mine]
                 columns.append(solve_columns(self.factor, block))
             check_ksp(self.factor, "low-rank columns of the CDEM stiffness")
-            Z = np.hstack([Z, *columns])
+            # past the columns held: a refusal below leaves them unused (rank is E's)
+            self._append_columns(columns)
             E = np.hstack([E, N])
         D = np.zeros((E.shape[1], E.shape[1]))
         D[: len(self.D), : len(self.D)] = self.D
         D += E[at].T @ C @ E[at]
+        Z = self._Z[:, : E.shape[1]]
         M = np.eye(E.shape[1]) + D @ (E.T @ self._gather(Z, rows_all))
         # det K = det K0 det M: a near-singular M is a near-singular K (a block held by
         # residual springs only), whose solution the compression's round-off (about 1e-16
         # of the change) would swamp; the caller refactorises it exactly instead
         if np.linalg.cond(M) > _MAX_CONDITION:
+            self.refused = "condition"
             return False
-        self.rows, self.E, self.Z, self.D, self.M = rows_all, E, Z, D, M
+        self.rows, self.E, self.D, self.M = rows_all, E, D, M
         return True
 
     def correct(self, y: np.ndarray) -> None:

@@ -67,13 +67,22 @@ class StiffnessOperator:
         self._values: np.ndarray | None = None
         self._key: Hashable = None
         self._updates = 0
-        self.counts = {"assembled": 0, "updated": 0, "unchanged": 0, "low_rank": 0}
+        # assembled: afresh (with analysis); updated: numeric refactorisations; low_rank:
+        # events taken as a correction, adding ``columns`` columns in all
+        self.counts = {"assembled": 0, "updated": 0, "unchanged": 0, "low_rank": 0, "columns": 0}
+        # why changes went into a refactorisation instead: past the cap, near singular
+        self.refusals = {"cap": 0, "condition": 0}
         self.seconds = {"assemble": 0.0, "update": 0.0, "factorise": 0.0, "low_rank": 0.0}
 
     @property
     def low_rank_columns(self) -> int:
         """Columns of the low-rank correction held now (0 right after a factorisation)."""
         return 0 if self._correction is None else self._correction.rank
+
+    def statistics(self) -> dict[str, object]:
+        """Return the counts and seconds of factorisations and low-rank events (for a summary)."""
+        seconds = {k: round(v, 3) for k, v in self.seconds.items()}
+        return {**self.counts, "refused": dict(self.refusals), "seconds": seconds}
 
     def solver(self, values: np.ndarray, key: Hashable, reduce: Reduce | None) -> PETSc.KSP:
         """Return the factorised KSP of the interfaces' integrals ``values`` (collective).
@@ -124,8 +133,10 @@ class StiffnessOperator:
         subset = PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN
         if self._current is not None:
             self._current.axpy(1.0, dK, structure=subset)
+        held = self.low_rank_columns
         if self._correction is not None and self._correction.add(dK):
             assert self._current is not None
+            self.counts["columns"] += self.low_rank_columns - held
             self._pending.append(dK)
             if self._solver is self._ksp:
                 self._solver = corrected_solver(self._correction, self._current)
@@ -134,6 +145,8 @@ class StiffnessOperator:
             self.counts["low_rank"] += 1
             self.seconds["low_rank"] += time.perf_counter() - t0
             return True
+        if self._correction is not None:
+            self.refusals[self._correction.refused] += 1
         # the kept factor's matrix takes every change since, in the order _current did
         for change in (*self._pending, dK):
             self._A.axpy(1.0, change, structure=subset)

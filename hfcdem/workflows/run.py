@@ -364,6 +364,8 @@ def _summarise(
         "rebuilds": frac.rebuilds,
         "rebuild_seconds": frac.rebuild_seconds,
         "rebuild_causes": dict(frac.rebuild_causes),  # contact, break, band, fill, ...
+        # since the start or the resume: what the rebuilds cost the solid's solver
+        "solid_operator": solid.operator.statistics(),
         "debris_cells": frac.debris_cells,  # cells cut loose from the walls, in the fluid
         "held_cells": int(solid.held_cells.size),  # loose cells a supporting wall holds
         "solid": solid.mode,
