@@ -79,7 +79,11 @@ def test_borehole_scene_breaks_at_the_wall_near_hubbert_willis(shared_tmp_path):
     # every rebuild after the start reached the solid's operator: a change or a factorisation
     op = summary["solid_operator"]
     assert op["assembled"] >= 1
-    assert op["assembled"] + op["updated"] + op["low_rank"] + op["unchanged"] >= summary["rebuilds"]
+    reused = summary["reused_condensations"]
+    assert 0 <= reused < summary["rebuilds"]
+    # a rebuild reaches the solid's operator unless it met states condensed before
+    solved = op["assembled"] + op["updated"] + op["low_rank"] + op["unchanged"]
+    assert solved >= summary["rebuilds"] - reused
 
 
 def test_the_reduced_solid_reproduces_the_full_borehole_run(shared_tmp_path):

@@ -10,9 +10,12 @@ with a symmetric compliance: :class:`~hfcdem.flow.balance.VoidVolumes`.
 
 from __future__ import annotations
 
+import collections
+import hashlib
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import dolfinx
 import dolfinx.fem.petsc
@@ -56,6 +59,51 @@ class CondensedSolid:
         u.x.array[:] = self.base.x.array
         for g, col in enumerate(self.columns):
             u.x.array[:] += p[g] * col.x.array
+
+
+class KeptCondensations:
+    """The last few condensations, by everything they were made from (collective keys).
+
+    A condensation depends on the interface states, the network and its pressure
+    groups, not on the pressures, so a state met again costs no solve.  That is
+    common: a contact round that undoes the one before (broken facets that open
+    under the fluid pressure and close again as their blocks press them shut)
+    comes back to the states of a moment ago, and so does the next step's first
+    round while nothing broke.
+    """
+
+    def __init__(self, comm: MPI.Comm, size: int = 4) -> None:
+        self.comm = comm
+        self.size = size
+        self._kept: collections.OrderedDict[bytes, Any] = collections.OrderedDict()
+        self.reused = 0
+
+    def key(self, local: Sequence[np.ndarray], shared: Sequence[object]) -> bytes:
+        """Digest of per-rank ``local`` arrays and ``shared`` values, the same on every rank."""
+        digest = hashlib.sha256()
+        for a in local:
+            digest.update(np.ascontiguousarray(a).tobytes())
+        combined = hashlib.sha256(b"".join(self.comm.allgather(digest.digest())))
+        for v in shared:
+            combined.update(
+                np.ascontiguousarray(v).tobytes() if isinstance(v, np.ndarray) else repr(v).encode()
+            )
+        return combined.digest()
+
+    def get(self, key: bytes) -> Any:
+        """Return the condensation kept under ``key``, or None."""
+        found = self._kept.get(key)
+        if found is not None:
+            self._kept.move_to_end(key)
+            self.reused += 1
+        return found
+
+    def put(self, key: bytes, value: Any) -> None:
+        """Keep ``value`` under ``key``, dropping the least recently used past ``size``."""
+        self._kept[key] = value
+        self._kept.move_to_end(key)
+        while len(self._kept) > self.size:
+            self._kept.popitem(last=False)
 
 
 # ------------------------------------------------------------------- cavity
@@ -283,6 +331,7 @@ def group_volumes(
 
 __all__ = [
     "CondensedSolid",
+    "KeptCondensations",
     "NetworkView",
     "cavity_load_form",
     "cavity_vertices",

@@ -15,7 +15,7 @@ until nothing changes; :mod:`~hfcdem.coupling.stepping` sizes the steps.  The
 fluid per facet lives in :class:`~hfcdem.coupling.fluidstate.FluidState`; every
 step records mass balance: injected = fluid in cavity + fractures + leaked.
 
-Size: about 730 lines, over the package's 600.  What is left is the step loop
+Size: about 760 lines, over the package's 600.  What is left is the step loop
 and the network-order fluid bookkeeping (fill, guess, solve, leak, accept); the
 seepage issue replaces that bookkeeping with a sparse flow system on every
 joint, so it is not split further before then.
@@ -38,6 +38,7 @@ from hfcdem.coupling import fields
 from hfcdem.coupling.checkpoint import SCALARS, checkpoint_data, read_checkpoint
 from hfcdem.coupling.condense import (
     CondensedSolid,
+    KeptCondensations,
     cavity_load_form,
     cavity_vertices,
     mean_point,
@@ -74,6 +75,9 @@ from hfcdem.solvers import ValidityLimit
 
 # rounds of contact switches in one step's state loop that may open faces (see _switch_contacts)
 _CONTACT_ROUNDS = 1
+# condensations of at most this many pressure groups are kept for states met again (each
+# group a displacement field: at No. 2's default mesh 3.2 MB)
+_KEPT_GROUPS = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -141,6 +145,7 @@ class HydraulicFracture:
         self._wall_joints = wall_joints(solid, s, self._cavity_vertices)
         self._cav_form = cavity_load_form(solid, s.cavity, self._intact_wall_joints())
         self._cavity_reference: float | None = None
+        self._condensations = KeptCondensations(self.comm)
         # reduced solid: the springs at the cavity walls, where stress concentrates, are
         # free from the start (recovered cell tractions underrate the wall's spring peaks)
         at_walls = np.isin(solid.vertex_ids, self._cavity_vertices).any(axis=1)
@@ -188,6 +193,11 @@ class HydraulicFracture:
 
     # ------------------------------------------------------------- network
 
+    @property
+    def reused_condensations(self) -> int:
+        """Rebuilds since the start or resume that met states condensed a moment before."""
+        return self._condensations.reused
+
     def _rebuild_network(self) -> None:
         self.network = network = local_network(self.solid, self._cavity_vertices)
         self.net, self.view = network.net, network.view
@@ -228,18 +238,30 @@ class HydraulicFracture:
         self.m = group_count(self.group)
         wet_joints = self._intact_wall_joints()
         solid.free_interfaces(wet_joints)  # reduced mode: pressure on glued faces does no work
-        base, columns = condense_network(solid, s.cavity, self.network, self.group, wet_joints)
-        if s.cavity:  # the intact joints change with breaks
-            self._cav_form = cavity_load_form(solid, s.cavity, wet_joints)
-        track = self._cav_form is not None and not s.rigid_cavity
-        v0, h, hc, wall, self.closure_stress = network_volumes(
-            solid,
-            self.network,
-            (base, columns),
-            self.fluid.residual_aperture,
-            self._cav_form if track else None,
-            self.group,
+        st = solid.states
+        key = self._condensations.key(
+            (st.state, st.contact, st.friction_traction, st.released, wet_joints),
+            (solid.band.version, solid.held_version, self.net.keys, self.group, self.is_open),
         )
+        kept = self._condensations.get(key)
+        if kept is None:
+            base, columns = condense_network(solid, s.cavity, self.network, self.group, wet_joints)
+            if s.cavity:  # the intact joints change with breaks
+                self._cav_form = cavity_load_form(solid, s.cavity, wet_joints)
+            track = self._cav_form is not None and not s.rigid_cavity
+            volumes = network_volumes(
+                solid,
+                self.network,
+                (base, columns),
+                self.fluid.residual_aperture,
+                self._cav_form if track else None,
+                self.group,
+            )
+            kept = (base, columns, self._cav_form, volumes)
+            if len(columns) <= _KEPT_GROUPS:  # many groups (viscous): too large to keep
+                self._condensations.put(key, kept)
+        base, columns, self._cav_form, volumes = kept
+        v0, h, hc, wall, self.closure_stress = volumes
         if self._cavity_reference is None:
             # the mesh (and cavity_volume) is the cavity as it stands at the start, after
             # excavation and at the initial pressure: measure wall motion from that state

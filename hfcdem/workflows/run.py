@@ -364,6 +364,7 @@ def _summarise(
         "rebuilds": frac.rebuilds,
         "rebuild_seconds": frac.rebuild_seconds,
         "rebuild_causes": dict(frac.rebuild_causes),  # contact, break, band, fill, ...
+        "reused_condensations": frac.reused_condensations,  # rebuilds that needed no solve
         # since the start or the resume: what the rebuilds cost the solid's solver
         "solid_operator": solid.operator.statistics(),
         "debris_cells": frac.debris_cells,  # cells cut loose from the walls, in the fluid
