@@ -83,6 +83,31 @@ def test_debris_faces_stay_released_through_a_checkpoint():
     assert int(np.sum(older.state != 0)) == 2 and not older.released.any()
 
 
+def test_the_pressure_a_facet_closed_at_goes_through_a_checkpoint():
+    broken = tiny_solid()
+    break_crack(broken)
+
+    # a pressure made of the facet's global vertex ids: the same facet, the same value
+    def made_up(solid, facets):
+        ids = np.sort(solid.vertex_ids[facets], axis=1)
+        return 61e6 + 1e3 * ids @ (10.0 ** np.arange(ids.shape[1]))
+
+    crack = crack_facets(broken)
+    broken.states.shut_at[crack] = made_up(broken, crack)
+    data = json.loads(json.dumps(checkpoint_data({"t": 2.0}, broken, _fluid())))
+    assert all(row[5] > 61e6 for row in data["interfaces"]) and len(data["interfaces"]) == 2
+    fresh = tiny_solid(MPI.COMM_SELF)
+    read_checkpoint(data, fresh)
+    crack = crack_facets(fresh)
+    assert np.array_equal(fresh.states.shut_at[crack], made_up(fresh, crack))
+    assert int(np.count_nonzero(np.isfinite(fresh.states.shut_at))) == 2
+    # a checkpoint from before the shut pressure (five items per row) reads as never closed
+    data["interfaces"] = [row[:5] for row in data["interfaces"]]
+    older = tiny_solid(MPI.COMM_SELF)
+    read_checkpoint(data, older)
+    assert int(np.sum(older.state != 0)) == 2 and np.isnan(older.states.shut_at).all()
+
+
 def test_the_reduced_band_round_trips_through_a_fresh_solid():
     broken = tiny_solid(mode="reduced")
     break_crack(broken)  # frees the crack and two vertex rings around it

@@ -104,6 +104,8 @@ def test_cavity_options():
         ({"solver__band_threshold": 1.5}, "solver.band_threshold"),
         ({"solver__band_rings": -1}, "solver.band_rings"),
         ({"solver__band_rings": 1.5}, "solver.band_rings"),
+        ({"solver__contact_hysteresis": "yes"}, "solver.contact_hysteresis"),
+        ({"solver__contact_hysteresis": 1}, "solver.contact_hysteresis"),
     ],
 )
 def test_bad_input_names_the_key(changes, key):
@@ -124,6 +126,13 @@ def test_output_section():
         scene(output__colour="red")
 
 
+def test_contact_hysteresis_is_read_as_a_flag():
+    assert scene(solver__contact_hysteresis=True).physics.solver.contact_hysteresis is True
+    assert scene().physics.solver.contact_hysteresis is False
+    with pytest.raises(SceneError, match=r"solver\.contact_hysteresis.*seepage"):
+        scene(solver__contact_hysteresis=True, injection__wall_joints="seepage")
+
+
 def test_every_default_has_one_home():
     # a scene that says nothing gets what the library classes say, field by field
     from hfcdem.config.materials import Fluid, InterfaceModel
@@ -140,6 +149,7 @@ def test_every_default_has_one_home():
     assert solver.max_breaks_per_iteration == flow.max_breaks_per_iteration
     assert solver.break_rule == model.break_rule
     assert solver.debris == flow.debris
+    assert solver.contact_hysteresis == flow.contact_hysteresis
     solid = inspect.signature(CDEMSolid).parameters
     assert solver.solid == solid["mode"].default
     assert (solver.band_threshold, solver.band_rings) == solid["band"].default

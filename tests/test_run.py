@@ -12,6 +12,7 @@ from hfcdem.cli import main
 from hfcdem.config.scene import load_scene, parse_scene
 from hfcdem.config.tables import SceneError
 from hfcdem.io.series import read_pvd
+from hfcdem.solid.states import OPEN
 from hfcdem.workflows.observers import StepObserver
 from hfcdem.workflows.run import OutputInUse, pressurised_groups, run_scene, supporting_walls
 
@@ -111,6 +112,30 @@ def test_the_reduced_solid_reproduces_the_full_borehole_run(shared_tmp_path):
     assert key(firsts["reduced"].midpoints) == key(firsts["full"].midpoints)
     assert reduced["solved_unknowns"] < 0.6 * full["solved_unknowns"]
     assert reduced["free_interfaces"] < full["free_interfaces"]
+
+
+def test_contact_hysteresis_leaves_a_run_without_reclosing_facets_alone(shared_tmp_path):
+    """``solver.contact_hysteresis`` acts only on facets that closed again.
+
+    On the coarse borehole 4 crack facets close again and none of them would
+    open again at or below the pressure it closed at, so the run is the same
+    with it; those pressures go into the checkpoint.
+    """
+    runs = {}
+    for on in (False, True):
+        scene = load_scene(BOREHOLE, "coarse", overrides={"solver.contact_hysteresis": on})
+        runs[on] = run_scene(scene, shared_tmp_path / f"hysteresis_{on}")
+    keys = ("first_crack_pressure_MPa", "peak_pressure_MPa", "tensile_failures", "rebuilds")
+    for key in keys:
+        assert runs[True][key] == pytest.approx(runs[False][key], rel=1e-12), key
+    assert runs[True]["rebuild_causes"] == runs[False]["rebuild_causes"]
+    assert runs[True]["rebuild_causes"]["contact"] > 0
+    rows = json.loads((shared_tmp_path / "hysteresis_True" / "checkpoint.json").read_text())
+    assert all(len(row) == 6 for row in rows["interfaces"]) and rows["interfaces"]
+    shut = [row[5] for row in rows["interfaces"] if row[2] != OPEN]
+    assert len(shut) == 4 and all(row[5] is None for row in rows["interfaces"] if row[2] == OPEN)
+    low, high = runs[True]["first_crack_pressure_MPa"], runs[True]["peak_pressure_MPa"]
+    assert all(0.9 * low < p / 1e6 <= high for p in shut), shut
 
 
 def test_another_scenes_results_are_kept_without_force(shared_tmp_path):

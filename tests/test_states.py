@@ -83,7 +83,7 @@ def test_wet_open_faces_close_only_past_the_overlap_their_pressure_would_take():
     assert faces_overlap(np.array([-1e-12]), np.array([-1e6]), kn)[0]  # suction adds no band
 
 
-def _one_facet_model(closing_rule):
+def _one_facet_model(closing_rule, hysteresis=False):
     """Contact states of a facet in a 1-DOF surrounding, iterated as the coupled step does.
 
     Separation w (spring extension from the in-situ state, opening positive) obeys
@@ -112,7 +112,9 @@ def _one_facet_model(closing_rule):
             tn = np.where(stuck, -sigma + kn * w, -p)
             gap = w - sigma / kn
             closing = closing_rule(gap, p, kn)
-            states.switch_contacts(np.ones(count, bool), tn, np.zeros((count, 2)), p, closing, 0.6)
+            states.switch_contacts(
+                np.ones(count, bool), tn, np.zeros((count, 2)), p, closing, 0.6, hysteresis
+            )
             seen.append(states.contact.copy())
         rounds.append(np.array(seen))
     return rounds, (d, p, C, sigma, kn)
@@ -128,6 +130,57 @@ def test_contact_switches_settle_in_one_round_on_one_quantity():
     chatter, _ = _one_facet_model(lambda gap, p, kn: gap < 0.0)
     flips = np.any(chatter[0][2:] != chatter[0][1:-1], axis=0)
     assert flips.any() and np.all(C[flips] * kn <= 18.0)
+
+
+def test_with_hysteresis_a_closed_facet_reopens_only_past_the_pressure_it_closed_at():
+    p = 62.5e6
+    s, broken = _broken([OPEN, OPEN])
+    none = np.zeros((2, 2))
+    # facet 0's blocks press it shut; the pressure on it then is kept
+    s.switch_contacts(
+        broken, np.full(2, -p), none, np.full(2, p), np.array([True, False]), 0.6, True
+    )
+    assert list(s.contact) == [STICK, OPEN]
+    assert s.shut_at[0] == p and np.isnan(s.shut_at[1])
+    # closed, its springs hold less compression than the fluid: it would open again
+    wants = np.array([-0.95 * p, -p])
+    plain = s.copy()
+    plain.switch_contacts(broken, wants, none, np.full(2, p), np.zeros(2, bool), 0.6)
+    assert plain.contact[0] == OPEN and np.isnan(plain.shut_at[0])
+    # with hysteresis it stays shut at the same pressure ...
+    s.switch_contacts(broken, wants, none, np.full(2, p), np.zeros(2, bool), 0.6, True)
+    assert list(s.contact) == [STICK, OPEN] and s.shut_at[0] == p
+    # ... and opens once the pressure on it passes that one, forgetting it
+    higher = np.full(2, p * (1 + 1e-9))
+    s.switch_contacts(broken, wants, none, higher, np.zeros(2, bool), 0.6, True)
+    assert list(s.contact) == [OPEN, OPEN] and np.isnan(s.shut_at).all()
+    # springs in tension open a facet whatever the pressure (a dry one: p = 0)
+    s.switch_contacts(
+        broken, np.array([-p, -p]), none, np.zeros(2), np.array([True, False]), 0.6, True
+    )
+    assert s.contact[0] == STICK and s.shut_at[0] == 0.0
+    s.switch_contacts(broken, np.array([1e5, -p]), none, np.zeros(2), np.zeros(2, bool), 0.6, True)
+    assert s.contact[0] == OPEN
+    # a facet never closed (a shear break) opens as without hysteresis
+    t, broken1 = _broken([STICK])
+    t.switch_contacts(
+        broken1,
+        np.array([-0.95 * p]),
+        np.zeros((1, 2)),
+        np.array([p]),
+        np.zeros(1, bool),
+        0.6,
+        True,
+    )
+    assert t.contact[0] == OPEN
+
+
+def test_hysteresis_leaves_the_settled_states_of_single_facets_alone():
+    plain, _ = _one_facet_model(faces_overlap)
+    held, _ = _one_facet_model(faces_overlap, hysteresis=True)
+    for a, b in zip(plain, held, strict=True):
+        assert np.array_equal(a, b)
+        assert 0 < int(np.sum(b[-1] == OPEN)) < b.shape[1]  # both states occur
 
 
 def test_coulomb_decides_stick_or_slip_and_friction_opposes_nothing_else():
@@ -165,8 +218,11 @@ def test_ghosts_take_the_owners_states_on_any_rank_count():
     chosen = ids.sum(axis=1) % 3 == 0
     owned_chosen = np.flatnonzero(chosen & solid.owned)
     solid.break_facets(owned_chosen, np.full(len(owned_chosen), FacetState.SHEAR), 0.0)
+    solid.states.shut_at[owned_chosen] = ids[owned_chosen].sum(axis=1) * 1e6
     solid.sync_ghost_states()
     assert np.array_equal(solid.state == FacetState.SHEAR, chosen)
+    assert np.array_equal(solid.states.shut_at[chosen], ids[chosen].sum(axis=1) * 1e6)
+    assert np.isnan(solid.states.shut_at[~chosen]).all()
     total = comm.allreduce(int(np.sum(chosen & solid.owned)), op=MPI.SUM)
     serial_ids = None
     if comm.rank == 0:

@@ -74,6 +74,9 @@ them so a run's record can print what was assumed.  Any invalid field raises
     band_threshold = 0.3        # reduced: a glued interface joins the band when its traction
                                 # (from the cells' stress) reaches this share of its strength
     band_rings = 2              # reduced: vertex rings of neighbours freed with each facet
+    contact_hysteresis = false  # true: a broken interface that closed opens again only once
+                                # the fluid pressure on it passes the one it closed at (no
+                                # contact chatter: fewer refactorisations at fine meshes)
 """
 
 from __future__ import annotations
@@ -133,6 +136,7 @@ class SolverSettings:
     band_threshold: float = 0.3
     band_rings: int = 2
     debris: str = "stay"
+    contact_hysteresis: bool = False
 
 
 @dataclass(frozen=True)
@@ -208,6 +212,10 @@ class _Reader:
             return table.number(key, default, **kw)
         if kind == "string":
             return table.string(key, default, **kw)
+        if kind == "flag":
+            value = table.raw(key, default, "true or false")
+            _check(isinstance(value, bool), table.sub(key), f"expected true or false: {value!r}")
+            return value
         return table.quantity(key, kind, default)
 
 
@@ -501,6 +509,9 @@ def _read_solver(r: _Reader) -> SolverSettings:
         solid=r.get(so, "solid", "string", (SolverSettings, "solid"), choices=("full", "reduced")),
         band_threshold=r.get(so, "band_threshold", "number", (SolverSettings, "band_threshold")),
         band_rings=r.get(so, "band_rings", "number", (SolverSettings, "band_rings"), integer=True),
+        contact_hysteresis=r.get(
+            so, "contact_hysteresis", "flag", (SolverSettings, "contact_hysteresis")
+        ),
     )
     _check(
         0.0 < solver.break_tolerance <= 1.0,
@@ -537,6 +548,11 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
         pump = _read_pump(r)
         output = _read_output(r)
         solver = _read_solver(r)
+        _check(
+            not (solver.contact_hysteresis and pump.get("wall_joints") == "seepage"),
+            "solver.contact_hysteresis",
+            "not available with wall_joints = 'seepage' (pumped seepage); use false",
+        )
         return Physics(
             rock=rock,
             interfaces=InterfaceModel(**model, break_rule=solver.break_rule),

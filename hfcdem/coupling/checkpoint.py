@@ -1,8 +1,9 @@
 """The coupled run's state as JSON: the content of ``checkpoint.json``.
 
 Interfaces (failure state, contact, friction traction, released as the faces
-of debris) and the fluid record (:class:`~hfcdem.coupling.fluidstate.FluidState`)
-are keyed by global vertex ids, so a run may resume on another number of ranks; the scalars are the
+of debris, the pressure a facet last closed at) and the fluid record
+(:class:`~hfcdem.coupling.fluidstate.FluidState`) are keyed by global vertex
+ids, so a run may resume on another number of ranks; the scalars are the
 problem's own (time, step size, volumes, counters).
 """
 
@@ -36,7 +37,10 @@ SCALARS = (
 
 
 def interface_rows(solid: CDEMSolid) -> list[list[Any]]:
-    """Key, state, contact, friction traction and release of every broken facet (collective)."""
+    """Key, state, contact, friction traction, release and shut pressure of every broken facet.
+
+    Collective.  The shut pressure is None where the facet has not closed.
+    """
     sel = np.flatnonzero((solid.state != FacetState.INTACT) & solid.owned)
     rows = [
         [
@@ -45,6 +49,7 @@ def interface_rows(solid: CDEMSolid) -> list[list[Any]]:
             int(solid.contact[i]),
             [float(x) for x in solid.friction_traction[i]],
             bool(solid.released[i]),
+            None if math.isnan(solid.states.shut_at[i]) else float(solid.states.shut_at[i]),
         ]
         for i in sel
     ]
@@ -55,13 +60,15 @@ def restore_interfaces(solid: CDEMSolid, rows: list[list[Any]]) -> None:
     """Set the states of this rank's facets among ``rows`` (of :func:`interface_rows`)."""
     ids = np.sort(np.asarray(solid.vertex_ids, dtype=np.int64), axis=1)
     local: dict[Key, int] = {tuple(int(v) for v in ids[i]): i for i in range(len(ids))}
-    for key, state, contact, friction, *released in rows:  # older checkpoints: 4 items
+    for key, state, contact, friction, *rest in rows:  # older checkpoints: 4 or 5 items
         i = local.get(tuple(key))
         if i is not None:
             solid.state[i] = state
             solid.contact[i] = contact
             solid.friction_traction[i] = friction
-            solid.released[i] = bool(released and released[0])
+            solid.released[i] = bool(rest and rest[0])
+            shut = rest[1] if len(rest) > 1 else None
+            solid.states.shut_at[i] = math.nan if shut is None else shut
 
 
 def band_rows(solid: CDEMSolid) -> list[list[int]]:

@@ -25,7 +25,9 @@ from hfcdem.solvers import ValidityLimit
 LOOSE_JUMP = 1.0
 
 
-def switch_contacts(solid: CDEMSolid, loads: Loads, only_closing: bool) -> int:
+def switch_contacts(
+    solid: CDEMSolid, loads: Loads, only_closing: bool, hysteresis: bool = False
+) -> int:
     """Switch contacts at ``loads``; return the global number switched (0: settled).
 
     ``only_closing``: switches that open a face are undone (the opening waits
@@ -34,14 +36,17 @@ def switch_contacts(solid: CDEMSolid, loads: Loads, only_closing: bool) -> int:
     the same pressure), so the loop ends, and no face is left open while its
     blocks interpenetrate (an open face has only the residual stiffness: a block
     it frees would fly).  (Two free rounds cost No. 2 coarse 34 more rebuilds for
-    the same breakdown to 10 digits.)  Ghost states follow their owners.
+    the same breakdown to 10 digits.)  ``hysteresis``: see
+    :meth:`~hfcdem.solid.states.InterfaceStates.switch_contacts`.  Ghost states
+    follow their owners.
     """
     saved = solid.states.copy()
-    switched = solid.update_contact(loads)
+    switched = solid.update_contact(loads, hysteresis)
     if switched and only_closing:
         keep = ~((saved.contact == OPEN) & (solid.contact != OPEN))
         solid.contact[keep] = saved.contact[keep]
         solid.friction_traction[keep] = saved.friction_traction[keep]
+        solid.states.shut_at[keep] = saved.shut_at[keep]
         changed = np.count_nonzero((solid.contact != saved.contact) & solid.owned)
         switched = int(solid.comm.allreduce(int(changed), op=MPI.SUM))
     if switched:

@@ -502,7 +502,9 @@ class HydraulicFracture:
 
     def _switch_contacts(self, loads: Loads, rounds: int) -> int:
         """Switch contacts (only closings after the first round); return how many switched."""
-        switched = switch_contacts(self.solid, loads, rounds >= _CONTACT_ROUNDS)
+        switched = switch_contacts(
+            self.solid, loads, rounds >= _CONTACT_ROUNDS, self.settings.contact_hysteresis
+        )
         if switched:
             self._last_change = f"{switched} contacts switched"
             self._recondense("contact")

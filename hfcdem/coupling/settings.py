@@ -40,6 +40,9 @@ class FlowSettings:
     ``rigid_cavity``: the stored cavity volume ignores the wall motion (the
     pressure still loads the wall): the paper's CDEM stores fluid only in its
     joints, so its pressurisation rate is Kw Q / V alone.
+    ``contact_hysteresis``: a broken facet that closed opens again only once
+    the fluid pressure on it passes the one it closed at
+    (:meth:`~hfcdem.solid.states.InterfaceStates.switch_contacts`).
     """
 
     cavity: tuple[str, ...] = ()
@@ -66,6 +69,7 @@ class FlowSettings:
     max_breaks_per_iteration: int | None = None
     newton_tolerance: float = 1e-10
     max_newton_iterations: int = 40
+    contact_hysteresis: bool = False
 
     def __post_init__(self) -> None:
         if self.fidelity not in ("viscous", "uniform"):

@@ -615,8 +615,12 @@ class CDEMSolid:
     def _crack_pressure(self, loads: Loads) -> np.ndarray:
         return np.broadcast_to(np.asarray(loads.crack_pressure, dtype=float), (self.num_facets,))
 
-    def update_contact(self, loads: Loads) -> int:
-        """Open/close/slip switches of broken facets; returns the global count of changes."""
+    def update_contact(self, loads: Loads, hysteresis: bool = False) -> int:
+        """Open/close/slip switches of broken facets; returns the global count of changes.
+
+        ``hysteresis``: a facet opens only once its fluid pressure has passed
+        the one it last closed at (:meth:`InterfaceStates.switch_contacts`).
+        """
         snap = self.snapshot(loads)
         # pre-existing cracks and the faces of loose blocks stay open
         broken = (self.state != FacetState.INTACT) & ~self.is_crack & ~self.states.released
@@ -631,6 +635,7 @@ class CDEMSolid:
             pressure,
             faces_overlap(snap.gap, pressure, self.kn),
             self.model.friction,
+            hysteresis,
         )
         changed = int(np.count_nonzero((old != self.contact) & self.owned))
         return int(self.comm.allreduce(changed, op=MPI.SUM))

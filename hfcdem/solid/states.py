@@ -5,7 +5,8 @@
 of a broken facet (open, stick, slip); ``friction_traction`` the Coulomb traction
 of a sliding facet on its ``+`` face; ``released`` the broken facets around a
 block cut loose from the rock, held open under the fluid that surrounds it
-(:mod:`hfcdem.solid.fragments`).  Owners decide; ghosts copy.
+(:mod:`hfcdem.solid.fragments`); ``shut_at`` the fluid pressure at which a broken
+facet last closed (NaN: none), for contact hysteresis.  Owners decide; ghosts copy.
 A cascade of breaks that does not settle at a fixed load stops with
 :class:`CascadeStopped`; the states and breaks reached so far are kept.
 """
@@ -75,6 +76,7 @@ class InterfaceStates:
     contact: np.ndarray  # (F,) int8 OPEN, STICK or SLIP
     friction_traction: np.ndarray  # (F, gdim) Pa, on the + face of sliding facets
     released: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))  # (F,)
+    shut_at: np.ndarray = field(default_factory=lambda: np.zeros(0))  # (F,) Pa, NaN: none
 
     def __post_init__(self) -> None:
         if not len(self.state) == len(self.contact) == len(self.friction_traction):
@@ -83,6 +85,10 @@ class InterfaceStates:
             self.released = np.zeros(len(self.state), dtype=bool)
         if len(self.released) != len(self.state):
             raise ValueError("released needs one row per facet")
+        if len(self.shut_at) == 0:
+            self.shut_at = np.full(len(self.state), np.nan)
+        if len(self.shut_at) != len(self.state):
+            raise ValueError("shut_at needs one row per facet")
 
     @classmethod
     def initial(cls, is_crack: np.ndarray, gdim: int) -> InterfaceStates:
@@ -100,6 +106,7 @@ class InterfaceStates:
             self.contact.copy(),
             self.friction_traction.copy(),
             self.released.copy(),
+            self.shut_at.copy(),
         )
 
     def restore(self, saved: InterfaceStates) -> None:
@@ -108,6 +115,7 @@ class InterfaceStates:
         self.contact[:] = saved.contact
         self.friction_traction[:] = saved.friction_traction
         self.released[:] = saved.released
+        self.shut_at[:] = saved.shut_at
 
     def break_facets(self, facets: np.ndarray, modes: np.ndarray) -> None:
         """Break ``facets`` in ``modes``: tensile breaks start open, shear breaks closed."""
@@ -130,19 +138,39 @@ class InterfaceStates:
         pressure: np.ndarray,
         closing: np.ndarray,
         friction: float,
+        hysteresis: bool = False,
     ) -> None:
         """Open, close, stick or slip the ``broken`` facets (pure NumPy).
 
         ``normal_traction`` and ``shear_vector`` are the tractions at the current
         states, ``pressure`` the fluid pressure per facet, ``closing`` the open
         facets whose faces interpenetrate (:func:`faces_overlap`).
+
+        ``hysteresis``: a facet that closed at a fluid pressure is opened by the
+        fluid again only once the pressure on it has passed that one (springs in
+        tension open it as without).  A broken facet whose springs hold less
+        compression than the fluid, opened together with its neighbours, can be
+        pressed shut by their blocks; without hysteresis it opens again at the
+        next check under the same pressure, and is shut again (contact chatter,
+        one refactorisation each way at fine meshes).  A crack that closed as the
+        pressure fell reopens as the pressure passes its closing value, as
+        without.  Every closing records its pressure in ``shut_at``; an opening
+        clears it.
         """
         old = self.contact.copy()
         # closed facets open when their normal traction exceeds the fluid pressure
         closed = broken & (self.contact != OPEN)
-        self.contact[closed & (normal_traction > -pressure)] = OPEN
+        opening = closed & (normal_traction > -pressure)
+        if hysteresis:
+            with np.errstate(invalid="ignore"):  # NaN (never shut) compares False
+                held = (pressure <= self.shut_at) & (normal_traction <= 0.0)
+            opening &= ~held
+        self.contact[opening] = OPEN
+        self.shut_at[opening] = np.nan
         # open facets close when the faces interpenetrate
-        self.contact[broken & (old == OPEN) & closing] = STICK
+        shutting = broken & (old == OPEN) & closing
+        self.contact[shutting] = STICK
+        self.shut_at[shutting] = pressure[shutting]
         # stick/slip by Coulomb on closed facets
         closed = broken & (self.contact != OPEN)
         limit = friction * np.maximum(-normal_traction, 0.0)
@@ -157,17 +185,19 @@ class InterfaceStates:
         )
 
     def sync_ghosts(self, imap: dolfinx.common.IndexMap, facets: np.ndarray) -> None:
-        """Copy the owners' state, contact and release to the ghosts of ``facets`` (collective)."""
-        vec = dolfinx.la.vector(imap, 3, dtype=np.float64)
-        arr = vec.array.reshape(-1, 3)
+        """Copy the owners' state, contact, release and shut pressure to the ghosts (collective)."""
+        vec = dolfinx.la.vector(imap, 4, dtype=np.float64)
+        arr = vec.array.reshape(-1, 4)
         arr[:] = -1.0
         arr[facets, 0] = self.state
         arr[facets, 1] = self.contact
         arr[facets, 2] = self.released
+        arr[facets, 3] = self.shut_at
         vec.scatter_forward()
         self.state[:] = arr[facets, 0].astype(np.int8)
         self.contact[:] = arr[facets, 1].astype(np.int8)
         self.released[:] = arr[facets, 2] > 0.5
+        self.shut_at[:] = arr[facets, 3]
 
 
 __all__ = ["OPEN", "SLIP", "STICK", "CascadeStopped", "InterfaceStates", "faces_overlap"]
