@@ -148,11 +148,13 @@ def test_with_hysteresis_a_closed_facet_reopens_only_past_the_pressure_it_closed
     plain.switch_contacts(broken, wants, none, np.full(2, p), np.zeros(2, bool), 0.6)
     assert plain.contact[0] == OPEN and np.isnan(plain.shut_at[0])
     # with hysteresis it stays shut at the same pressure ...
-    s.switch_contacts(broken, wants, none, np.full(2, p), np.zeros(2, bool), 0.6, True)
+    held = s.switch_contacts(broken, wants, none, np.full(2, p), np.zeros(2, bool), 0.6, True)
     assert list(s.contact) == [STICK, OPEN] and s.shut_at[0] == p
+    assert list(held) == [True, False]
     # ... and opens once the pressure on it passes that one, forgetting it
     higher = np.full(2, p * (1 + 1e-9))
-    s.switch_contacts(broken, wants, none, higher, np.zeros(2, bool), 0.6, True)
+    held = s.switch_contacts(broken, wants, none, higher, np.zeros(2, bool), 0.6, True)
+    assert not held.any()
     assert list(s.contact) == [OPEN, OPEN] and np.isnan(s.shut_at).all()
     # springs in tension open a facet whatever the pressure (a dry one: p = 0)
     s.switch_contacts(

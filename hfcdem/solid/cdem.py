@@ -99,6 +99,18 @@ class InterfaceSnapshot:
     gap: np.ndarray  # w past the pre-compression offset, unclipped (m; negative: overlap)
 
 
+@dataclass(frozen=True)
+class HeldShut:
+    """What contact hysteresis held shut at a contact check (global).
+
+    ``count`` facets that would have opened; ``excess`` the largest share of
+    the fluid pressure by which it exceeds the compression their springs hold.
+    """
+
+    count: int = 0
+    excess: float = 0.0
+
+
 @dataclass
 class BreakEvent:
     """Interfaces broken at one load level."""
@@ -199,6 +211,7 @@ class CDEMSolid:
         )
         # facets that ever broke, and their contact sub-state
         self.states = InterfaceStates.initial(self.is_crack, gdim)
+        self.held_shut = HeldShut()
         # reduced mode: free springs only in a band, glued (continuous) elsewhere
         self.band = InterfaceBand(mesh, self.interface_facets, *band, all_free=mode == "full")
         self._recovery = StressRecovery(self.u, material)
@@ -620,6 +633,9 @@ class CDEMSolid:
 
         ``hysteresis``: a facet opens only once its fluid pressure has passed
         the one it last closed at (:meth:`InterfaceStates.switch_contacts`).
+        ``held_shut`` keeps what that rule held shut at this check (global):
+        the number of facets and the largest share of the fluid pressure by
+        which the pressure exceeds the compression their springs hold.
         """
         snap = self.snapshot(loads)
         # pre-existing cracks and the faces of loose blocks stay open
@@ -628,14 +644,22 @@ class CDEMSolid:
         # both directions compare the normal spring traction t0n + kn w with the fluid
         # pressure (faces_overlap)
         pressure = self._crack_pressure(loads)
-        self.states.switch_contacts(
-            broken,
-            snap.normal_traction,
-            snap.shear_vector,
-            pressure,
-            faces_overlap(snap.gap, pressure, self.kn),
-            self.model.friction,
-            hysteresis,
+        held = (
+            self.states.switch_contacts(
+                broken,
+                snap.normal_traction,
+                snap.shear_vector,
+                pressure,
+                faces_overlap(snap.gap, pressure, self.kn),
+                self.model.friction,
+                hysteresis,
+            )
+            & self.owned
+        )
+        excess = (pressure[held] + snap.normal_traction[held]) / pressure[held]
+        self.held_shut = HeldShut(
+            int(self.comm.allreduce(int(np.count_nonzero(held)), op=MPI.SUM)),
+            float(self.comm.allreduce(float(excess.max(initial=0.0)), op=MPI.MAX)),
         )
         changed = int(np.count_nonzero((old != self.contact) & self.owned))
         return int(self.comm.allreduce(changed, op=MPI.SUM))
@@ -780,6 +804,7 @@ __all__ = [
     "BreakEvent",
     "CDEMSolid",
     "CascadeStopped",
+    "HeldShut",
     "InterfaceSnapshot",
     "Loads",
     "ZoneMarker",

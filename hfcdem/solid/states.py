@@ -139,8 +139,10 @@ class InterfaceStates:
         closing: np.ndarray,
         friction: float,
         hysteresis: bool = False,
-    ) -> None:
+    ) -> np.ndarray:
         """Open, close, stick or slip the ``broken`` facets (pure NumPy).
+
+        Returns the facets the hysteresis keeps shut that would open without it.
 
         ``normal_traction`` and ``shear_vector`` are the tractions at the current
         states, ``pressure`` the fluid pressure per facet, ``closing`` the open
@@ -161,9 +163,10 @@ class InterfaceStates:
         # closed facets open when their normal traction exceeds the fluid pressure
         closed = broken & (self.contact != OPEN)
         opening = closed & (normal_traction > -pressure)
+        held = np.zeros(len(opening), dtype=bool)
         if hysteresis:
             with np.errstate(invalid="ignore"):  # NaN (never shut) compares False
-                held = (pressure <= self.shut_at) & (normal_traction <= 0.0)
+                held = opening & (pressure <= self.shut_at) & (normal_traction <= 0.0)
             opening &= ~held
         self.contact[opening] = OPEN
         self.shut_at[opening] = np.nan
@@ -183,6 +186,7 @@ class InterfaceStates:
         self.friction_traction = np.where(
             (self.contact == SLIP)[:, None], direction * limit[:, None], 0.0
         )
+        return held
 
     def sync_ghosts(self, imap: dolfinx.common.IndexMap, facets: np.ndarray) -> None:
         """Copy the owners' state, contact, release and shut pressure to the ghosts (collective)."""

@@ -368,6 +368,12 @@ def _summarise(
         "reused_condensations": frac.reused_condensations,  # rebuilds that needed no solve
         # since the start or the resume: what the rebuilds cost the solid's solver
         "solid_operator": solid.operator.statistics(),
+        # contact hysteresis at the last contact check: facets it held shut that would
+        # open without it, and the largest share of the pressure by which they would
+        "contact_held_shut": {
+            "count": solid.held_shut.count,
+            "excess": solid.held_shut.excess,
+        },
         "debris_cells": frac.debris_cells,  # cells cut loose from the walls, in the fluid
         "held_cells": int(solid.held_cells.size),  # loose cells a supporting wall holds
         "solid": solid.mode,
