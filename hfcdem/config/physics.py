@@ -74,13 +74,14 @@ them so a run's record can print what was assumed.  Any invalid field raises
     band_threshold = 0.3        # reduced: a glued interface joins the band when its traction
                                 # (from the cells' stress) reaches this share of its strength
     band_rings = 2              # reduced: vertex rings of neighbours freed with each facet
-    contact_hysteresis = false  # true: a broken interface that closed opens again only once
-                                # the fluid pressure on it passes the one it closed at (no
-                                # contact chatter: fewer refactorisations at fine meshes)
+    contact_hysteresis = true   # a broken interface that closed opens again only once the
+                                # fluid pressure on it passes the one it closed at (no contact
+                                # chatter); false with wall_joints = "seepage", which lacks it
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -136,7 +137,7 @@ class SolverSettings:
     band_threshold: float = 0.3
     band_rings: int = 2
     debris: str = "stay"
-    contact_hysteresis: bool = False
+    contact_hysteresis: bool = True
 
 
 @dataclass(frozen=True)
@@ -548,11 +549,14 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
         pump = _read_pump(r)
         output = _read_output(r)
         solver = _read_solver(r)
-        _check(
-            not (solver.contact_hysteresis and pump.get("wall_joints") == "seepage"),
-            "solver.contact_hysteresis",
-            "not available with wall_joints = 'seepage' (pumped seepage); use false",
-        )
+        if solver.contact_hysteresis and pump.get("wall_joints") == "seepage":
+            # the pumped seepage run has its own contact loop, without hysteresis
+            _check(
+                "solver.contact_hysteresis" in r.defaulted,
+                "solver.contact_hysteresis",
+                "not available with wall_joints = 'seepage' (pumped seepage); use false",
+            )
+            solver = dataclasses.replace(solver, contact_hysteresis=False)
         return Physics(
             rock=rock,
             interfaces=InterfaceModel(**model, break_rule=solver.break_rule),

@@ -69,7 +69,7 @@ class FlowSettings:
     max_breaks_per_iteration: int | None = None
     newton_tolerance: float = 1e-10
     max_newton_iterations: int = 40
-    contact_hysteresis: bool = False
+    contact_hysteresis: bool = True
 
     def __post_init__(self) -> None:
         if self.fidelity not in ("viscous", "uniform"):
