@@ -130,11 +130,12 @@ def main(argv: list[str] | None = None) -> list[dict]:
 # ``study.png`` draws the three breakdowns; each azimuth's folder has its
 # ``pressure.png`` and ``fracture.png``, the fracture seen down the well, to
 # check whether it turns toward SH.  This case is not reproduced yet.
-# README ("Perforation scenes") has the coarse runs of 2026-12-02: peaks of
-# 13.86, 7.71 and 11.82 MPa, not rising with the azimuth.  Each run ended
-# after its peak at the model's validity limit: blocks cut loose from the
-# tunnel wall moved further than a small-displacement solid can follow, and
-# the summary says so (``validity_limit``) rather than failing.
+# README ("Perforation scenes") has the coarse runs of 2026-12-04: peaks of
+# 10.11, 7.71 and 9.91 MPa, not rising with the azimuth.  The 30 and 45 deg
+# runs start with interfaces broken by the in-situ stress alone and end after
+# their peaks at the model's validity limit: blocks cut loose from the tunnel
+# wall moved further than a small-displacement solid can follow, and the
+# summary says so (``validity_limit``) rather than failing.
 
 # %%
 if __name__ == "__main__":
