@@ -178,6 +178,21 @@ def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
         seepage_loading(load_scene(PUMPING, "coarse", overrides={"injection.wall_film": "5 um"}))
 
 
+def test_pumped_seepage_takes_contact_hysteresis_when_asked(shared_tmp_path):
+    """Off by default for pumped seepage; asked for, the borehole's run is the same.
+
+    Its cracks open and stay open, so the rule never holds a facet shut there.
+    """
+    assert not load_scene(PUMPING, "coarse").physics.solver.contact_hysteresis
+    runs = {}
+    for on in (False, True):
+        scene = load_scene(PUMPING, "coarse", overrides={"solver.contact_hysteresis": on})
+        assert scene.physics.solver.contact_hysteresis is on
+        runs[on] = run_scene(scene, shared_tmp_path / f"hysteresis_{on}")
+    for key in ("breakdown_pressure_MPa", "first_crack_pressure_MPa", "tensile_failures"):
+        assert runs[True][key] == pytest.approx(runs[False][key], rel=1e-12), key
+
+
 def test_apertures_held_at_a_cell_size_make_the_first_crack_mesh_objective(shared_tmp_path):
     """The pumped borehole at two meshes (a/5 and a/10 at the wall), 20 s.
 

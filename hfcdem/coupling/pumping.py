@@ -205,6 +205,7 @@ def pump_with_seepage(
     frames: Frames | None = None,
     supports: Sequence[str] = (),
     at_first_break: Callable[[float], None] | None = None,
+    contact_hysteresis: bool = False,
 ) -> PumpingResult:
     """Pump into the ``cavity`` facet groups and follow breaks and pressure (collective).
 
@@ -222,7 +223,8 @@ def pump_with_seepage(
     the time and the fluid pressure and saturation per local facet
     (:meth:`_PumpedCavity.fields`); ``at_first_break``
     (collectively) with the time, after the step of the first break, when the
-    solid holds that step's state.
+    solid holds that step's state.  ``contact_hysteresis``: see
+    :meth:`~hfcdem.solid.states.InterfaceStates.switch_contacts`.
     """
     if not isinstance(aperture, JointAperture):
         aperture = JointAperture(aperture)  # checks it
@@ -238,7 +240,9 @@ def pump_with_seepage(
             None, None, None, None, None, None, p0, 0.0, True, stop.broken, 0,
             stopped=f"the excavated rock fails before pumping: {stop}",
         )  # fmt: skip
-    run = _PumpedCavity(solid, tuple(cavity), fluid, aperture, pumping, tuple(supports))
+    run = _PumpedCavity(
+        solid, tuple(cavity), fluid, aperture, pumping, tuple(supports), contact_hysteresis
+    )
     try:
         return run.run(initial_failures, progress, max_state_iterations, frames, at_first_break)
     finally:
@@ -275,9 +279,10 @@ class _PumpedCavity:
         aperture: JointAperture,
         pumping: CavityPumping,
         supports: tuple[str, ...] = (),
+        hysteresis: bool = False,
     ) -> None:
         self.solid, self.cavity, self.fluid = solid, cavity, fluid
-        self.supports = supports
+        self.supports, self.hysteresis = supports, hysteresis
         self.aperture, self.pumping = aperture, pumping
         self.kw = fluid.bulk_modulus
         self.walls = cavity_vertices(solid, cavity, None)
@@ -661,7 +666,7 @@ class _PumpedCavity:
                     solid.u.x.array[:] = u_start
                     continue
             top = max(top, p)
-            if switch_contacts(solid, loads, only_closing=rounds >= 1):
+            if switch_contacts(solid, loads, rounds >= 1, self.hysteresis):
                 rounds += 1
                 self.resolve(loads)
                 continue

@@ -286,6 +286,7 @@ def _run_pumped(
         frames=frame,
         supports=supports,
         at_first_break=at_first_break,
+        contact_hysteresis=phys.solver.contact_hysteresis,
     )
     if result.stopped:
         say(f"stopped: {result.stopped}")
