@@ -178,12 +178,9 @@ def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
         seepage_loading(load_scene(PUMPING, "coarse", overrides={"injection.wall_film": "5 um"}))
 
 
-def test_pumped_seepage_takes_contact_hysteresis_when_asked(shared_tmp_path):
-    """Off by default for pumped seepage; asked for, the borehole's run is the same.
-
-    Its cracks open and stay open, so the rule never holds a facet shut there.
-    """
-    assert not load_scene(PUMPING, "coarse").physics.solver.contact_hysteresis
+def test_pumped_seepage_runs_the_same_with_contact_hysteresis_or_without(shared_tmp_path):
+    """The pumped borehole's cracks open and stay open: the rule holds no facet shut."""
+    assert load_scene(PUMPING, "coarse").physics.solver.contact_hysteresis
     runs = {}
     for on in (False, True):
         scene = load_scene(PUMPING, "coarse", overrides={"solver.contact_hysteresis": on})

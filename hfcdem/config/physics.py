@@ -76,12 +76,11 @@ them so a run's record can print what was assumed.  Any invalid field raises
     band_rings = 2              # reduced: vertex rings of neighbours freed with each facet
     contact_hysteresis = true   # a broken interface that closed opens again only once the
                                 # fluid pressure on it passes the one it closed at (no contact
-                                # chatter); with wall_joints = "seepage" false unless given
+                                # chatter at fine meshes)
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -549,9 +548,6 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
         pump = _read_pump(r)
         output = _read_output(r)
         solver = _read_solver(r)
-        if pump.get("wall_joints") == "seepage" and "solver.contact_hysteresis" in r.defaulted:
-            # the pumped seepage run's figures are measured without it so far
-            solver = dataclasses.replace(solver, contact_hysteresis=False)
         return Physics(
             rock=rock,
             interfaces=InterfaceModel(**model, break_rule=solver.break_rule),

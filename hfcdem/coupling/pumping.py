@@ -205,7 +205,7 @@ def pump_with_seepage(
     frames: Frames | None = None,
     supports: Sequence[str] = (),
     at_first_break: Callable[[float], None] | None = None,
-    contact_hysteresis: bool = False,
+    contact_hysteresis: bool = True,
 ) -> PumpingResult:
     """Pump into the ``cavity`` facet groups and follow breaks and pressure (collective).
 
@@ -279,7 +279,7 @@ class _PumpedCavity:
         aperture: JointAperture,
         pumping: CavityPumping,
         supports: tuple[str, ...] = (),
-        hysteresis: bool = False,
+        hysteresis: bool = True,
     ) -> None:
         self.solid, self.cavity, self.fluid = solid, cavity, fluid
         self.supports, self.hysteresis = supports, hysteresis
