@@ -42,7 +42,8 @@ class FlowSettings:
     joints, so its pressurisation rate is Kw Q / V alone.
     ``contact_hysteresis``: a broken facet that closed opens again only once
     the fluid pressure on it passes the one it closed at
-    (:meth:`~hfcdem.solid.states.InterfaceStates.switch_contacts`).
+    (:meth:`~hfcdem.solid.states.InterfaceStates.switch_contacts`); taken by
+    the ``uniform`` fidelity only, not yet by ``viscous`` flow.
     """
 
     cavity: tuple[str, ...] = ()
