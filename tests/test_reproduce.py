@@ -19,7 +19,9 @@ from hfcdem.reproduce.compare import (
     failure_modes,
     first_cracks,
     four_charges,
+    lab_specimen,
     peak_against,
+    peak_cut_short,
     shape_degrees,
     stress_at_root,
     stresses_at_roots,
@@ -136,6 +138,27 @@ def test_a_case_at_the_models_validity_limit_is_not_a_failure(tmp_path):
     assert case_status(CaseResult(tmp_path, (), rows=mixed))[0] == "stopped"
     # a summary written before the flag existed: a stop is a stop
     assert case_status(CaseResult(tmp_path, (), summary={"stopped": "x"}))[0] == "stopped"
+
+
+@pytest.mark.serial
+def test_a_peak_cut_short_by_the_validity_limit_is_not_judged(tmp_path):
+    # the lab rows of the full report: a drop at 4.61 MPa, then a higher peak cut
+    # short; a pressure still rising at the limit; a drop that confirms the peak
+    cut = {"peak_pressure_MPa": 10.11, "breakdown_pressure_MPa": 4.61, "validity_limit": True}
+    rising = {"peak_pressure_MPa": 7.71, "breakdown_pressure_MPa": None, "validity_limit": True}
+    confirmed = {"peak_pressure_MPa": 9.91, "breakdown_pressure_MPa": 9.91, "validity_limit": True}
+    ended = {"peak_pressure_MPa": 36.4, "breakdown_pressure_MPa": None, "validity_limit": False}
+    assert "lower bound" in peak_cut_short(cut) and "lower bound" in peak_cut_short(rising)
+    assert peak_cut_short(confirmed) is None and peak_cut_short(ended) is None
+    rows = tuple({"x": math.radians(a), **s} for a, s in ((30, cut), (45, rising), (60, confirmed)))
+    r30, r45, r60, rise = lab_specimen(CaseResult(tmp_path, (), rows=rows))
+    assert r30.gap == pytest.approx(10.11 / 10.39 - 1) and r30.met is None and r45.met is None
+    assert r30.note.startswith("not judged") and r60.met is False  # -36 %
+    assert rise.met is None and rise.ours_text == "no" and rise.withheld == "a lower bound"
+    (row,) = peak_against("p", 10.0, "s", 0.1)(CaseResult(tmp_path, (), summary=cut))
+    assert row.met is None and row.target == ""
+    (row,) = peak_against("p", 36.0, "s", 0.1)(CaseResult(tmp_path, (), summary=ended))
+    assert row.met is True
 
 
 @pytest.mark.serial

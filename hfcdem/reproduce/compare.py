@@ -35,7 +35,8 @@ class Comparison:
     ``tolerance``: the relative gap the target allows (None: not judged).
     ``agrees``: for a trend or an ordering, whether ours goes the paper's way
     (then ``ours_text`` and ``reference_text`` say how).  ``error``: the
-    estimated discretisation error of ``ours``, in its unit.
+    estimated discretisation error of ``ours``, in its unit.  ``withheld``: why
+    a row that has a reference is not judged, in a few words ("lower bound").
     """
 
     quantity: str
@@ -49,6 +50,7 @@ class Comparison:
     reference_text: str | None = None
     agrees: bool | None = None
     note: str = ""
+    withheld: str = ""
 
     @property
     def gap(self) -> float | None:
@@ -256,28 +258,58 @@ def paper_trend(
     )
 
 
+#: why a peak cut short by the validity limit is not judged (the report's met column)
+LOWER_BOUND = "a lower bound"
+
+
+def peak_cut_short(s: Mapping[str, Any]) -> str | None:
+    """Say why a run's peak is only a lower bound, or None when it stands.
+
+    A run that ended at the model's validity limit before a drop confirmed its
+    peak might have gone higher: its peak is not judged against a measured or
+    published breakdown.  A run that reached its planned end keeps its peak
+    (the paper's breakdown is the highest injection pressure).
+    """
+    peak, bd = s.get("peak_pressure_MPa"), s.get("breakdown_pressure_MPa")
+    if not s.get("validity_limit") or peak is None:
+        return None
+    if bd is not None and bd >= peak * (1.0 - 1e-9):
+        return None
+    return (
+        "not judged: the run ended at the model's validity limit before a drop "
+        "confirmed this peak, so it is a lower bound"
+    )
+
+
 def lab_specimen(r: CaseResult) -> list[Comparison]:
     """Breakdown (the peak, as the paper) per azimuth against the measurements; its rise."""
     out = []
     ours = []
+    shorts: list[str | None] = []
     for row in r.rows:
         azimuth = round(math.degrees(_x(row)))
         peak = row.get("peak_pressure_MPa")
         ours.append(peak)
         bd = row.get("breakdown_pressure_MPa")
         drop = f"first confirmed drop after {bd:.2f} MPa" if bd else "no confirmed drop"
+        short = peak_cut_short(row)
+        shorts.append(short)
         out.append(
             Comparison(f"breakdown (peak) at {azimuth} deg", peak,
                        references.LAB_MEASURED[azimuth], "MPa",
-                       "measured (Jiang et al., the paper's Fig. 9)", 0.10,
-                       note=f"{drop}; the paper's CDEM: "
-                       f"{references.LAB_PAPER_SIMULATED[azimuth]} MPa")
+                       "measured (Jiang et al., the paper's Fig. 9)",
+                       None if short else 0.10,
+                       note=f"{short + '; ' if short else ''}{drop}; the paper's CDEM: "
+                       f"{references.LAB_PAPER_SIMULATED[azimuth]} MPa",
+                       withheld=LOWER_BOUND if short else "")
         )  # fmt: skip
     if ours and all(p is not None for p in ours):
         rising = all(a < b for a, b in itertools.pairwise(ours))  # type: ignore[operator]
+        bounded = any(shorts)
         out.append(
             Comparison("breakdown rises with azimuth", None, ours_text="yes" if rising else "no",
-                       reference_text="yes (measured)", agrees=rising)
+                       reference_text="yes (measured)", agrees=None if bounded else rising,
+                       withheld=LOWER_BOUND if bounded else "")
         )  # fmt: skip
     return out
 
@@ -295,10 +327,15 @@ def _peak_rows(
             bd = row.get("breakdown_pressure_MPa")
             peak = row.get("peak_pressure_MPa")
             note = "confirmed by a drop" if bd else "highest pressure of the run, no drop"
+            short = peak_cut_short(row)
+            if short:
+                note = f"{short}; {note}"
             if name in assumed:
                 note = "ASSUMED profile (the paper prints it only in a figure); " + note
             out.append(
-                Comparison(shown, peak, values.get(name), "MPa", source, 0.10, note=note)
+                Comparison(shown, peak, values.get(name), "MPa", source,
+                           None if short else 0.10, note=note,
+                           withheld=LOWER_BOUND if short else "")
             )  # fmt: skip
         return out
 
@@ -307,14 +344,17 @@ def _peak_rows(
 
 def _orderings(r: CaseResult, pairs: Sequence[tuple[str, str, str]]) -> list[Comparison]:
     peaks = {str(row["value"]): row.get("peak_pressure_MPa") for row in r.rows}
+    short = {str(row["value"]) for row in r.rows if peak_cut_short(row)}
     out = []
     for low, high, what in pairs:
         a, b = peaks.get(low), peaks.get(high)
         if a is None or b is None:
             continue
+        bounded = low in short or high in short
         out.append(
             Comparison(what, b - a, ours_text=f"{a:.2f} vs {b:.2f} MPa",
-                       reference_text="holds", agrees=a < b, source="the paper's ordering")
+                       reference_text="holds", agrees=None if bounded else a < b,
+                       source="the paper's ordering", withheld=LOWER_BOUND if bounded else "")
         )  # fmt: skip
     return out
 
@@ -620,9 +660,13 @@ def peak_against(
         s = r.summary
         bd = s.get("breakdown_pressure_MPa")
         extra = "confirmed by a drop" if bd else "highest pressure of the run, no drop"
+        short = peak_cut_short(s)
+        if short:
+            extra = f"{short}; {extra}"
         rows = [
-            Comparison(quantity, s.get("peak_pressure_MPa"), reference, "MPa", source, tolerance,
-                       note=f"{extra}{'; ' + note if note else ''}")
+            Comparison(quantity, s.get("peak_pressure_MPa"), reference, "MPa", source,
+                       None if short else tolerance, note=f"{extra}{'; ' + note if note else ''}",
+                       withheld=LOWER_BOUND if short else "")
         ]  # fmt: skip
         first = s.get("first_crack") or {}
         where, place = first.get("distance_from_wellbore_wall_m"), first.get("place")
@@ -657,6 +701,7 @@ __all__ = [
     "lab_specimen",
     "paper_trend",
     "peak_against",
+    "peak_cut_short",
     "plot_degrees",
     "shape_degrees",
     "shape_study",

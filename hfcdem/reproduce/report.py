@@ -57,6 +57,8 @@ def _num(v: float | None, digits: int = 4) -> str:
 
 
 def _met(c: Comparison) -> str:
+    if c.met is None and c.withheld:
+        return f"not judged: {c.withheld}"
     return {True: "met", False: "NOT met", None: ""}[c.met]
 
 
