@@ -117,6 +117,49 @@ def kirsch_wall_hoop_stress(
     return sh_max + sh_min - 2.0 * (sh_max - sh_min) * np.cos(2.0 * theta) - wellbore_pressure
 
 
+def hole_wall_least_stress(
+    stress: ArrayLike,
+    axis: ArrayLike,
+    poisson_ratio: float,
+    pressure: float = 0.0,
+    points: int = 720,
+) -> tuple[float, FloatArray]:
+    """Least principal stress on the wall of a circular hole of any direction.
+
+    ``stress``: the far-field 3 x 3 tensor, compression positive; ``axis``: the
+    hole's direction; ``pressure``: the fluid pressure on its wall.  Generalised
+    plane strain about the axis (Hiramatsu and Oka 1962; Fairhurst 1968): at the
+    wall angle theta from the first cross-axis direction,
+
+        s_tt = sx + sy - 2 (sx - sy) cos 2t - 4 txy sin 2t - p,
+        s_zz = sz - 2 nu ((sx - sy) cos 2t + 2 txy sin 2t),
+        t_tz = 2 (tyz cos t - txz sin t),  s_rr = p,
+
+    with x, y across the axis and z along it.  Returns the least principal
+    stress over the wall (negative: tension) and the unit vector from the axis
+    to where it acts.  Reduces to Kirsch's 3 Sh - SH for a vertical hole.
+    """
+    a = np.asarray(axis, dtype=float)
+    a = a / np.linalg.norm(a)
+    seed = np.eye(3)[int(np.argmin(np.abs(a)))]
+    e1 = np.cross(a, seed)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(a, e1)
+    rot = np.array([e1, e2, a])
+    local = rot @ np.asarray(stress, dtype=float) @ rot.T
+    sx, sy, sz = local[0, 0], local[1, 1], local[2, 2]
+    txy, txz, tyz = local[0, 1], local[0, 2], local[1, 2]
+    t = np.linspace(0.0, 2.0 * np.pi, points, endpoint=False)
+    c2, s2 = np.cos(2.0 * t), np.sin(2.0 * t)
+    tt = sx + sy - 2.0 * (sx - sy) * c2 - 4.0 * txy * s2 - pressure
+    zz = sz - 2.0 * poisson_ratio * ((sx - sy) * c2 + 2.0 * txy * s2)
+    tz = 2.0 * (tyz * np.cos(t) - txz * np.sin(t))
+    tangent = 0.5 * (tt + zz) - np.sqrt(0.25 * (tt - zz) ** 2 + tz**2)
+    least = np.minimum(tangent, pressure)
+    k = int(np.argmin(least))
+    return float(least[k]), np.cos(t[k]) * e1 + np.sin(t[k]) * e2
+
+
 def hubbert_willis_breakdown(
     sh_max: float, sh_min: float, tensile_strength: float, pore_pressure: float = 0.0
 ) -> float:
@@ -244,6 +287,7 @@ __all__ = [
     "frustum_lateral_area",
     "frustum_volume",
     "haimson_fairhurst_breakdown",
+    "hole_wall_least_stress",
     "hubbert_willis_breakdown",
     "kgd_toughness",
     "kgd_viscosity",

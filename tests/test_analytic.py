@@ -106,3 +106,30 @@ def test_frustum_stack_of_a_cylinder_and_a_cone():
     assert analytic.equal_volume_cylinder_diameter([2, 2, 2], [0, 1, 3]) == pytest.approx(2.0)
     with pytest.raises(ValueError, match="equal length"):
         analytic.frustum_volume([1, 2, 3], [0, 1])
+
+
+def test_hole_wall_least_stress_is_kirsch_for_a_vertical_hole():
+    # the lab specimen's wellbore: 3 Sh - SH = -3 MPa, along SH (x)
+    stress = np.diag([6e6, 1e6, 15e6])
+    least, where = analytic.hole_wall_least_stress(stress, (0, 0, 1), 0.23)
+    assert least == pytest.approx(3 * 1e6 - 6e6, rel=1e-6)
+    assert abs(where[0]) == pytest.approx(1.0)
+    hoop = analytic.kirsch_wall_hoop_stress(0.0, 6e6, 1e6, 2e6)
+    assert analytic.hole_wall_least_stress(stress, (0, 0, 1), 0.23, 2e6)[0] == pytest.approx(hoop)
+
+
+def test_hole_wall_least_stress_of_antiplane_shear_and_rotations():
+    # shear along the axis alone: tau_tz = 2 tau at the wall, least principal -2 tau
+    tau = 1e6
+    stress = np.array([[0.0, 0.0, tau], [0.0, 0.0, 0.0], [tau, 0.0, 0.0]])
+    least, _ = analytic.hole_wall_least_stress(stress, (0, 0, 1), 0.25)
+    assert least == pytest.approx(-2 * tau, rel=1e-4)
+    # turning the stress and the hole together changes nothing
+    rng = np.random.default_rng(3)
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    s = np.diag([6e6, 1e6, 15e6])
+    axis = np.array([np.cos(0.5), np.sin(0.5), 0.0])
+    a, wa = analytic.hole_wall_least_stress(s, axis, 0.23)
+    b, wb = analytic.hole_wall_least_stress(q @ s @ q.T, q @ axis, 0.23)
+    assert b == pytest.approx(a, rel=1e-4)
+    assert abs(np.dot(q @ wa, wb)) == pytest.approx(1.0, abs=1e-3)  # the same wall point

@@ -151,7 +151,13 @@ def test_a_peak_cut_short_by_the_validity_limit_is_not_judged(tmp_path):
     assert "lower bound" in peak_cut_short(cut) and "lower bound" in peak_cut_short(rising)
     assert peak_cut_short(confirmed) is None and peak_cut_short(ended) is None
     rows = tuple({"x": math.radians(a), **s} for a, s in ((30, cut), (45, rising), (60, confirmed)))
+    wall = {"hole": "perforation 1", "tension_MPa": 10.29, "tensile_strength_MPa": 2.59}
+    rows[0]["in_situ_wall_tension"] = [{**wall, "exceeds": True}]
     r30, r45, r60, rise = lab_specimen(CaseResult(tmp_path, (), rows=rows))
+    assert "cracks its walls (closed form, tension in MPa: perforation 1 10.29; T0 2.59)" in (
+        r30.note
+    )
+    assert "closed form" not in r45.note
     assert r30.gap == pytest.approx(10.11 / 10.39 - 1) and r30.met is None and r45.met is None
     assert r30.note.startswith("not judged") and r60.met is False  # -36 %
     assert rise.met is None and rise.ours_text == "no" and rise.withheld == "a lower bound"

@@ -294,6 +294,13 @@ def lab_specimen(r: CaseResult) -> list[Comparison]:
         drop = f"first confirmed drop after {bd:.2f} MPa" if bd else "no confirmed drop"
         short = peak_cut_short(row)
         shorts.append(short)
+        over = [w for w in row.get("in_situ_wall_tension") or () if w.get("exceeds")]
+        if over:
+            walls = ", ".join(f"{w['hole']} {w['tension_MPa']:.2f}" for w in over)
+            drop += (
+                f"; the in-situ stress alone cracks its walls (closed form, tension in MPa: "
+                f"{walls}; T0 {over[0]['tensile_strength_MPa']:.2f})"
+            )
         out.append(
             Comparison(f"breakdown (peak) at {azimuth} deg", peak,
                        references.LAB_MEASURED[azimuth], "MPa",

@@ -62,6 +62,7 @@ from hfcdem.workflows.places import (
     stress_along_tunnels,
     wellbore_place,
 )
+from hfcdem.workflows.wall_stress import in_situ_wall_tension, wall_tension_warning
 
 ROLLER_AXES = {"symmetry_x": 0, "symmetry_y": 1, "symmetry_z": 2}
 
@@ -301,6 +302,10 @@ def _run_coupled(
     if resume:
         _resume(frac, out, fingerprint, first, say, comm)
     resumed = bool(frac.history)
+    walls = in_situ_wall_tension(scene)
+    warning = wall_tension_warning(walls)
+    if warning:
+        say(warning)
     if not resumed:
         failed = frac.settle()
         if failed:
@@ -324,6 +329,8 @@ def _run_coupled(
     write_interfaces(out / "fracture.vtu", points, data, comm)
     summary = _summarise(scene, frac, found, pressures, first, stopped, limit) | record()
     summary |= _inlet_answers(scene, frac)
+    # closed form: the walls' largest tension under the in-situ stress alone
+    summary["in_situ_wall_tension"] = [w.as_dict() for w in walls]
     write_json(out / "summary.json", summary, comm)
     if comm.rank == 0 and pressures:
         _plot_pressure(out / "pressure.png", times, pressures, found, scene.name)
