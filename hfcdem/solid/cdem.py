@@ -656,13 +656,18 @@ class CDEMSolid:
             )
             & self.owned
         )
-        excess = (pressure[held] + snap.normal_traction[held]) / pressure[held]
-        self.held_shut = HeldShut(
-            int(self.comm.allreduce(int(np.count_nonzero(held)), op=MPI.SUM)),
-            float(self.comm.allreduce(float(excess.max(initial=0.0)), op=MPI.MAX)),
+        counts = np.array(
+            [np.count_nonzero((old != self.contact) & self.owned), np.count_nonzero(held)],
+            dtype=np.int64,
         )
-        changed = int(np.count_nonzero((old != self.contact) & self.owned))
-        return int(self.comm.allreduce(changed, op=MPI.SUM))
+        self.comm.Allreduce(MPI.IN_PLACE, counts, op=MPI.SUM)  # one reduction when none held
+        changed, count = int(counts[0]), int(counts[1])
+        excess = 0.0
+        if count:  # the same on every rank
+            local = (pressure[held] + snap.normal_traction[held]) / pressure[held]
+            excess = float(self.comm.allreduce(float(local.max(initial=0.0)), op=MPI.MAX))
+        self.held_shut = HeldShut(count, excess)
+        return changed
 
     def overstress(self, loads: Loads) -> tuple[np.ndarray, np.ndarray]:
         """Failure ratio and mode of the intact owned facets (others get ratio 0).
