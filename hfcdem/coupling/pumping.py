@@ -33,9 +33,11 @@ shortened to the crossing (the loads interpolated linearly within it).
 
 The breakdown is the peak cavity pressure, counted only when the pressure
 falls below it by :data:`BREAKDOWN_DROP` before the run ends (a peak cut off
-by the end of the run is flagged, not published) and when it rose above the
+by the end of the run is flagged, not published), when it rose above the
 starting pressure first (a pressure that only falls, the joints taking more
-than the pump delivers, has no breakdown).  The first break is
+than the pump delivers, has no breakdown) and when some interface has broken
+since the start (a dip while the dry joints take fluid and nothing breaks is
+not one).  The first break is
 reported separately: in 3D it is often a shear breakout at the tunnel wall
 that takes no fluid and leaves the pressure rising.
 """
@@ -733,6 +735,8 @@ class _PumpedCavity:
         first: tuple[float, float, int, np.ndarray] | None = None
         peak, peak_time, stopped, limit = self.p, 0.0, None, False
         breakdown: tuple[float, float] | None = None
+        # a drop with no interface broken since the start is the joints' intake
+        broken_start = sum(solid.broken_counts().values())
         every = max(1, pumping.steps // 10)
         if frames is not None:
             frames(t, *self.fields())
@@ -788,8 +792,14 @@ class _PumpedCavity:
             )
             if top > peak:
                 peak, peak_time = top, t
-            elif breakdown is None and peak_time > 0.0 and self.p < peak * (1.0 - BREAKDOWN_DROP):
-                # (a fall from the starting pressure is the joints' intake, not a breakdown)
+            elif (
+                breakdown is None
+                and peak_time > 0.0
+                and self.p < peak * (1.0 - BREAKDOWN_DROP)
+                and counts["tensile"] + counts["shear"] > broken_start
+            ):
+                # (a fall from the starting pressure, or one while nothing breaks, is the
+                # joints' intake, not a breakdown)
                 breakdown = (peak, peak_time)
             if progress is not None:
                 for news in self.debris_news:
