@@ -160,6 +160,51 @@ def hole_wall_least_stress(
     return float(least[k]), np.cos(t[k]) * e1 + np.sin(t[k]) * e2
 
 
+def filtered_wall_breakdown(
+    radius: float,
+    sh_max: float,
+    sh_min: float,
+    tensile_strength: float,
+    length: float,
+    points: int = 1200,
+) -> float:
+    """Wellbore pressure at which the Kirsch stress filtered over ``length`` reaches T0.
+
+    The strength over a length of :mod:`hfcdem.solid.nonlocal_strength`: the
+    stress normal to the radial plane along SH, filtered by the 2D Helmholtz
+    kernel ``K0(d / l) / (2 pi l^2)`` with an image across the wall's tangent at
+    the wall point (the zero-flux condition of a straight wall; a source on the
+    wall is its own image), normalised over the rock, taken at the wall and set
+    equal to ``tensile_strength``.  It is
+    Hubbert-Willis' ``3 Sh - SH + T0`` as ``l -> 0``; for ``l > 0`` the wall's
+    curvature is only approximated (the image kernel's weight over the rock is
+    1.05 at ``l = a / 10``).  Plane strain, stresses compression positive.
+    """
+    from scipy.special import k0
+
+    if not 0.0 < length < radius:
+        raise ValueError(f"length must be in (0, radius), got {length!r}")
+    reach = 12.0 * length
+    xs = np.linspace(radius - reach, radius + reach, points)
+    ys = np.linspace(-reach, reach, points)
+    x, y = np.meshgrid(xs, ys)
+    rock = np.hypot(x, y) > radius
+    # the source on the wall is its own image: the kernel doubles, and the
+    # normalisation over the rock takes the factor out
+    w = np.where(rock, k0(np.maximum(np.hypot(x - radius, y), 1e-12) / length), 0.0)
+
+    def normal_y(pressure: float) -> float:
+        r, theta = np.hypot(x, y), np.arctan2(y, x)
+        k = kirsch_stress(np.where(rock, r, radius), theta, radius, sh_max, sh_min, pressure)
+        s, c = np.sin(theta), np.cos(theta)
+        yy = k.rr * s**2 + k.tt * c**2 + 2.0 * k.rt * s * c
+        return float((w * -yy).sum() / w.sum())  # tension positive
+
+    at_zero = normal_y(0.0)
+    per_pascal = (normal_y(1e6) - at_zero) / 1e6
+    return (tensile_strength - at_zero) / per_pascal
+
+
 def hubbert_willis_breakdown(
     sh_max: float, sh_min: float, tensile_strength: float, pore_pressure: float = 0.0
 ) -> float:
@@ -284,6 +329,7 @@ __all__ = [
     "KGDState",
     "KirschStress",
     "equal_volume_cylinder_diameter",
+    "filtered_wall_breakdown",
     "frustum_lateral_area",
     "frustum_volume",
     "haimson_fairhurst_breakdown",

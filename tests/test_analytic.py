@@ -133,3 +133,12 @@ def test_hole_wall_least_stress_of_antiplane_shear_and_rotations():
     b, wb = analytic.hole_wall_least_stress(q @ s @ q.T, q @ axis, 0.23)
     assert b == pytest.approx(a, rel=1e-4)
     assert abs(np.dot(q @ wa, wb)) == pytest.approx(1.0, abs=1e-3)  # the same wall point
+
+
+def test_filtered_wall_breakdown_tends_to_hubbert_willis_and_rises_with_the_length():
+    hw = analytic.hubbert_willis_breakdown(20e6, 12e6, 5e6)
+    # the shift grows about linearly with l / a (+0.28 % at 1e-3): at 1e-4, +0.03 %
+    short = analytic.filtered_wall_breakdown(0.03, 20e6, 12e6, 5e6, 3e-6)
+    assert short == pytest.approx(hw, rel=5e-4)
+    p3, p6 = (analytic.filtered_wall_breakdown(0.03, 20e6, 12e6, 5e6, lv) for lv in (3e-3, 6e-3))
+    assert hw < p3 < p6

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -144,6 +144,10 @@ class InterfaceModel:
     - ``break_rule``: ``"all"`` breaks every overstressed interface at once,
       ``"most_overstressed"`` only the worst one and then re-solves,
       ``"cap"`` the ``max_breaks`` worst ones.
+    - ``strength_length``: the length (m) over which the rock resists; when
+      positive, the failure check reads the stress filtered over it
+      (:mod:`hfcdem.solid.nonlocal_strength`), not the springs' own traction.
+      0 (the default): strength at a point, as CDEM.
     - ``residual_stiffness``: open faces keep this fraction of kn and ks, so a
       block whose every face has broken stays attached (numerically) instead of
       making the system singular.  Its relative effect on an opening is about
@@ -160,8 +164,24 @@ class InterfaceModel:
     break_rule: str = "most_overstressed"
     max_breaks: int = 1
     residual_stiffness: float = 1e-10
+    # left out of repr while 0 (see __repr__): runs written before it resume
+    strength_length: float = field(default=0.0, repr=False)
+
+    def __repr__(self) -> str:
+        # the scene fingerprint hashes reprs; a field added later keeps its default out
+        # of them so that older runs still resume
+        shown = ", ".join(
+            f"{f}={getattr(self, f)!r}" for f in self.__dataclass_fields__ if f != "strength_length"
+        )
+        extra = f", strength_length={self.strength_length!r}" if self.strength_length else ""
+        return f"InterfaceModel({shown}{extra})"
 
     def __post_init__(self) -> None:
+        if not (math.isfinite(self.strength_length) and 0.0 <= self.strength_length <= 10.0):
+            raise ValueError(
+                "strength_length must be a length in [0, 10] m (0: strength at a point), "
+                f"got {self.strength_length!r}"
+            )
         if not (math.isfinite(self.alpha) and 0.0 < self.alpha <= 1e12):
             raise ValueError(f"alpha must be in (0, 1e12] (kn = alpha E / h), got {self.alpha!r}")
         if self.shear_ratio is not None and not (

@@ -17,6 +17,8 @@ them so a run's record can print what was assumed.  Any invalid field raises
     joint_reference_size = "5 mm"  # optional: cell size at which joint_aperture holds
                                 # (apertures then follow the mesh size: hfcdem.flow.apertures)
     weibull_modulus = 5         # optional scatter of the strengths
+    strength_length = "0 mm"    # the length the rock resists over (0: strength at a point;
+                                # > 0: the check reads the stress filtered over it)
     spring_factor = 100         # alpha in kn = alpha E / h
 
     [stress]                    # compression positive
@@ -260,10 +262,18 @@ def _read_rock(r: _Reader) -> tuple[ElasticMaterial, dict[str, Any], JointApertu
             "rock.joint_reference_size",
             f"expected the cell size at which joint_aperture holds, 10 um to 10 m, got {size!r} m",
         )
+    # optional, and off unless given: not listed among the defaults a run assumed
+    length = rock.quantity("strength_length", "length") if rock.has("strength_length") else 0.0
+    _check(
+        0.0 <= length <= 10.0,
+        "rock.strength_length",
+        f"expected the length the rock resists over, 0 (a point) to 10 m, got {length!r} m",
+    )
     rock.finish()
 
     model = {
         "alpha": alpha,
+        "strength_length": length,
         "tensile_strength": t0,
         "cohesion": c0,
         "friction_angle": phi,

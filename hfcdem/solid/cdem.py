@@ -63,6 +63,7 @@ from hfcdem.solid.interfaces import (
     stable_facet_hash,
     weibull_scatter,
 )
+from hfcdem.solid.nonlocal_strength import StressFilter
 from hfcdem.solid.operator import StiffnessOperator
 from hfcdem.solid.reduction import ReducedSystem, glued_facet_set
 from hfcdem.solid.states import OPEN, SLIP, STICK, CascadeStopped, InterfaceStates, faces_overlap
@@ -215,6 +216,13 @@ class CDEMSolid:
         # reduced mode: free springs only in a band, glued (continuous) elsewhere
         self.band = InterfaceBand(mesh, self.interface_facets, *band, all_free=mode == "full")
         self._recovery = StressRecovery(self.u, material)
+        # strength over a material length: the check reads the filtered stress
+        self._filter = (
+            StressFilter(self.u, material, self.facets, self.cells[:, 0],
+                         interfaces.strength_length, prefix=f"{prefix}filter_")
+            if interfaces.strength_length > 0.0
+            else None
+        )  # fmt: skip
         self._reduced: ReducedSystem | None = None
         self._reduced_version: tuple[int, int] | None = None
         # the compiled stiffness form of the last interface states (a new one costs ~60 ms)
@@ -625,6 +633,25 @@ class CDEMSolid:
             gap=w - offset,
         )
 
+    def filtered_tractions(self, loads: Loads) -> tuple[np.ndarray, np.ndarray]:
+        """Return the normal (tension +) and shear traction of the filtered stress; collective.
+
+        The stress filtered over ``strength_length`` (:class:`StressFilter`) plus
+        the in-situ stress, on each facet's plane; fluid held in an intact joint
+        pushes its faces apart, so its pressure adds to the normal traction
+        (effective stress).  Requires a positive ``strength_length``.
+        """
+        if self._filter is None:
+            raise ValueError("filtered_tractions needs a positive strength_length")
+        s = self._filter.midpoint_stress() + loads.in_situ_factor * self.sigma0
+        n = self.normals
+        t = np.einsum("fij,fj->fi", s, n)
+        tn = np.einsum("fi,fi->f", t, n)
+        shear = np.linalg.norm(t - tn[:, None] * n, axis=1)
+        if loads.joint_pressure is not None:
+            tn = tn + np.asarray(loads.joint_pressure, dtype=float)
+        return tn, shear
+
     def _crack_pressure(self, loads: Loads) -> np.ndarray:
         return np.broadcast_to(np.asarray(loads.crack_pressure, dtype=float), (self.num_facets,))
 
@@ -677,7 +704,11 @@ class CDEMSolid:
         """
         ratio: np.ndarray = np.zeros(self.num_facets)
         mode: np.ndarray = np.full(self.num_facets, FacetState.TENSILE, dtype=np.int8)
-        for pts in self.strength_points:
+        if self._filter is not None:
+            check = check_failure(*self.filtered_tractions(loads), self.t0, self.c0,
+                                  self.model.friction)  # fmt: skip
+            ratio, mode = check.ratio, check.mode
+        for pts in self.strength_points if self._filter is None else ():
             # glued facets are zeroed below: recovering their traction here is wasted work
             snap = self.snapshot(loads, points=pts, recover=False)
             check = check_failure(
@@ -699,10 +730,12 @@ class CDEMSolid:
         """
         if self.mode == "full":
             return 0
-        snap = self.snapshot(loads)
-        check = check_failure(
-            snap.normal_traction, snap.shear_traction, self.t0, self.c0, self.model.friction
-        )
+        if self._filter is not None:
+            tractions = self.filtered_tractions(loads)
+        else:
+            snap = self.snapshot(loads)
+            tractions = (snap.normal_traction, snap.shear_traction)
+        check = check_failure(*tractions, self.t0, self.c0, self.model.friction)
         near = ~self.band.free & self.owned & (check.ratio >= self.band.threshold)
         return self.band.include(near)
 
