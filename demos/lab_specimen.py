@@ -135,7 +135,11 @@ def main(argv: list[str] | None = None) -> list[dict]:
 # runs start with interfaces broken by the in-situ stress alone and end after
 # their peaks at the model's validity limit: blocks cut loose from the tunnel
 # wall moved further than a small-displacement solid can follow, and the
-# summary says so (``validity_limit``) rather than failing.
+# summary says so (``validity_limit``) rather than failing.  Why they start
+# broken is printed at the start of each run and kept in ``summary.json``
+# (``in_situ_wall_tension``): Table 2's Sv of 15 MPa across the 2 mm tunnels
+# puts their walls in 10.3 / 8.3 / 6.0 MPa of tension at 30 / 45 / 60 deg,
+# above T0 = 2.59 MPa, before any fluid arrives.
 
 # %%
 if __name__ == "__main__":
