@@ -117,14 +117,14 @@ def kirsch_wall_hoop_stress(
     return sh_max + sh_min - 2.0 * (sh_max - sh_min) * np.cos(2.0 * theta) - wellbore_pressure
 
 
-def hole_wall_least_stress(
+def hole_wall_principal_stresses(
     stress: ArrayLike,
     axis: ArrayLike,
     poisson_ratio: float,
     pressure: float = 0.0,
     points: int = 720,
-) -> tuple[float, FloatArray]:
-    """Least principal stress on the wall of a circular hole of any direction.
+) -> tuple[FloatArray, FloatArray]:
+    """Principal stresses on the wall of a circular hole of any direction.
 
     ``stress``: the far-field 3 x 3 tensor, compression positive; ``axis``: the
     hole's direction; ``pressure``: the fluid pressure on its wall.  Generalised
@@ -135,9 +135,9 @@ def hole_wall_least_stress(
         s_zz = sz - 2 nu ((sx - sy) cos 2t + 2 txy sin 2t),
         t_tz = 2 (tyz cos t - txz sin t),  s_rr = p,
 
-    with x, y across the axis and z along it.  Returns the least principal
-    stress over the wall (negative: tension) and the unit vector from the axis
-    to where it acts.  Reduces to Kirsch's 3 Sh - SH for a vertical hole.
+    with x, y across the axis and z along it.  Returns the unit vectors from the
+    axis to the wall points, (points, 3), and the principal stresses there,
+    (points, 3), ascending.
     """
     a = np.asarray(axis, dtype=float)
     a = a / np.linalg.norm(a)
@@ -154,10 +154,47 @@ def hole_wall_least_stress(
     tt = sx + sy - 2.0 * (sx - sy) * c2 - 4.0 * txy * s2 - pressure
     zz = sz - 2.0 * poisson_ratio * ((sx - sy) * c2 + 2.0 * txy * s2)
     tz = 2.0 * (tyz * np.cos(t) - txz * np.sin(t))
-    tangent = 0.5 * (tt + zz) - np.sqrt(0.25 * (tt - zz) ** 2 + tz**2)
-    least = np.minimum(tangent, pressure)
-    k = int(np.argmin(least))
-    return float(least[k]), np.cos(t[k]) * e1 + np.sin(t[k]) * e2
+    half = np.sqrt(0.25 * (tt - zz) ** 2 + tz**2)
+    principal = np.sort(
+        np.stack([0.5 * (tt + zz) - half, 0.5 * (tt + zz) + half, np.full_like(t, pressure)], 1),
+        axis=1,
+    )
+    where = np.outer(np.cos(t), e1) + np.outer(np.sin(t), e2)
+    return where, principal
+
+
+def hole_wall_least_stress(
+    stress: ArrayLike,
+    axis: ArrayLike,
+    poisson_ratio: float,
+    pressure: float = 0.0,
+    points: int = 720,
+) -> tuple[float, FloatArray]:
+    """Least principal stress on the wall of a circular hole (negative: tension).
+
+    See :func:`hole_wall_principal_stresses`; returns the least over the wall and
+    the unit vector from the axis to where it acts.  Reduces to Kirsch's
+    ``3 Sh - SH`` for a vertical hole.
+    """
+    where, principal = hole_wall_principal_stresses(stress, axis, poisson_ratio, pressure, points)
+    k = int(np.argmin(principal[:, 0]))
+    return float(principal[k, 0]), where[k]
+
+
+def mohr_coulomb_ratio(principal: ArrayLike, cohesion: float, friction_angle: float) -> FloatArray:
+    """Mohr-Coulomb demand over capacity on the worst plane: >= 1 fails in shear.
+
+    ``principal``: (..., 3) ascending principal stresses, compression positive;
+    ``friction_angle`` in degrees.  The ratio of the largest shear, ``(s1 - s3) / 2``,
+    to ``c0 cos phi + (s1 + s3) / 2 sin phi`` (infinite when that is not positive:
+    then the tension cut-off decides).
+    """
+    p = np.asarray(principal, dtype=float)
+    phi = np.radians(friction_angle)
+    radius = 0.5 * (p[..., 2] - p[..., 0])
+    capacity = cohesion * np.cos(phi) + 0.5 * (p[..., 2] + p[..., 0]) * np.sin(phi)
+    with np.errstate(divide="ignore"):
+        return np.where(capacity > 0.0, radius / np.where(capacity > 0.0, capacity, 1.0), np.inf)
 
 
 def filtered_wall_breakdown(
@@ -334,11 +371,13 @@ __all__ = [
     "frustum_volume",
     "haimson_fairhurst_breakdown",
     "hole_wall_least_stress",
+    "hole_wall_principal_stresses",
     "hubbert_willis_breakdown",
     "kgd_toughness",
     "kgd_viscosity",
     "kirsch_stress",
     "kirsch_wall_hoop_stress",
+    "mohr_coulomb_ratio",
     "penny_opening",
     "penny_volume",
     "plane_strain_modulus",

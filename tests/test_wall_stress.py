@@ -1,5 +1,6 @@
 """The closed-form check of cavity walls under the in-situ stress alone."""
 
+import math
 from pathlib import Path
 
 import pytest
@@ -23,13 +24,24 @@ def test_the_lab_specimen_walls_crack_under_the_in_situ_stress(azimuth, tunnel):
         assert abs(w.where[2]) > 0.99  # at the roof and floor: Sv pulls them apart
     text = wall_tension_warning(walls)
     assert "tensile strength 2.59 MPa" in text and f"perforation 1 {tunnel:.2f} MPa" in text
+    assert 1.1 < walls[1].shear_ratio < 1.2  # and beyond Mohr-Coulomb where compressed
 
 
 @pytest.mark.serial
-def test_deep_scenes_and_plates_have_no_wall_in_tension():
+def test_deep_scenes_have_no_wall_in_tension_but_a_wellbore_breakout():
+    # No. 2: the wellbore runs along Sh (y), so Sv 76 and SH 73 MPa act across it and
+    # its cased (unloaded) wall carries up to 3 Sv - SH = 155 MPa of hoop stress, beyond
+    # Mohr-Coulomb (c0 17 MPa, phi 40 deg): a breakout
     no2 = in_situ_wall_tension(load_scene(SCENES / "perforation_no2.toml"))
     assert len(no2) == 2 and not any(w.exceeds or w.tension for w in no2)
-    assert wall_tension_warning(no2) is None
+    phi = math.radians(40.0)
+    breakout = 77.5 / (17.0 * math.cos(phi) + 77.5 * math.sin(phi))
+    assert no2[0].shear_ratio == pytest.approx(breakout, rel=1e-3) and no2[0].shears
+    assert not no2[1].shears  # the tunnel, at its 30 MPa start
+    text = wall_tension_warning(no2)
+    assert "in shear beyond Mohr-Coulomb (demand over capacity): wellbore 1.23x" in text
+    assert "tension" not in text
     field = in_situ_wall_tension(load_scene(SCENES / "field_cluster.toml"))
-    assert len(field) == 7 and wall_tension_warning(field) is None
+    assert len(field) == 7 and not any(w.exceeds for w in field)
+    assert [w.hole for w in field if w.shears] == ["wellbore"]
     assert in_situ_wall_tension(load_scene(SCENES / "sneddon_plate.toml")) == []

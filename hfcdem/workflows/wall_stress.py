@@ -7,7 +7,10 @@ pressure where the fluid loads it.  Where its least principal stress is a
 tension above the rock's tensile strength, a strength criterion breaks the wall
 before any injection, and with no length scale in the criterion the number of
 broken interfaces grows as the mesh refines around the hole.  The lab specimen
-(Sv 15, SH 6, Sh 1 MPa, T0 2.59 MPa) is such a scene at 30 and 45 deg.
+(Sv 15, SH 6, Sh 1 MPa, T0 2.59 MPa) is such a scene at every azimuth.  Where
+the wall is compressed, a Mohr-Coulomb ratio says whether a plane there fails
+in shear: the unloaded (cased) wellbore walls of the deep scenes do (a
+breakout: No. 2's carries up to 3 Sv - SH = 155 MPa against c0 = 17 MPa).
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from hfcdem.analytic import hole_wall_least_stress
+from hfcdem.analytic import hole_wall_principal_stresses, mohr_coulomb_ratio
 from hfcdem.config.geometry import PerforatedBlock, Scene
 
 
@@ -27,18 +30,26 @@ class WallTension:
     """The largest tension (Pa, 0 for none) on one wall under the in-situ stress alone.
 
     ``where``: the unit vector from the hole's axis to the wall point where it
-    acts; ``strength``: the rock's tensile strength (Pa).
+    acts; ``strength``: the rock's tensile strength (Pa); ``shear_ratio``: the
+    largest Mohr-Coulomb demand over capacity on the wall where no principal
+    stress is a tension (>= 1: a plane there fails in shear).
     """
 
     hole: str
     tension: float
     where: tuple[float, float, float]
     strength: float
+    shear_ratio: float = 0.0
 
     @property
     def exceeds(self) -> bool:
-        """Whether the wall is expected to crack before injection."""
+        """Whether the wall is expected to crack in tension before injection."""
         return self.tension > self.strength
+
+    @property
+    def shears(self) -> bool:
+        """Whether the wall is expected to fail in shear before injection."""
+        return self.shear_ratio >= 1.0
 
     def as_dict(self) -> dict[str, Any]:
         """Return the check as ``summary.json`` keeps it (MPa)."""
@@ -47,6 +58,7 @@ class WallTension:
             "tension_MPa": self.tension / 1e6,
             "tensile_strength_MPa": self.strength / 1e6,
             "exceeds": self.exceeds,
+            "shear_ratio": self.shear_ratio,
             "where": [round(v, 4) for v in self.where],
         }
 
@@ -75,26 +87,38 @@ def in_situ_wall_tension(scene: Scene) -> list[WallTension]:
         (f"perforation {k + 1}", np.asarray(perf.direction), p0)
         for k, perf in enumerate(geo.perforations)
     ]
+    model = phys.interfaces
     out = []
     for name, axis, pressure in holes:
-        least, where = hole_wall_least_stress(stress, axis, rock.poisson_ratio, pressure)
-        x, y, z = (float(v) for v in where)
-        out.append(WallTension(name, max(0.0, -least), (x, y, z), strength))
+        where, principal = hole_wall_principal_stresses(stress, axis, rock.poisson_ratio, pressure)
+        k = int(np.argmin(principal[:, 0]))
+        compressed = principal[:, 0] >= 0.0  # elsewhere the tension cut-off decides
+        ratio = mohr_coulomb_ratio(principal[compressed], model.cohesion, model.friction_angle)
+        x, y, z = (float(v) for v in where[k])
+        tension = max(0.0, -float(principal[k, 0]))
+        out.append(WallTension(name, tension, (x, y, z), strength, float(ratio.max(initial=0.0))))
     return out
 
 
 def wall_tension_warning(checks: list[WallTension]) -> str | None:
     """Say which walls the in-situ stress alone cracks, or None when none."""
     over = [c for c in checks if c.exceeds]
-    if not over:
+    sheared = [c for c in checks if c.shears]
+    if not over and not sheared:
         return None
-    walls = ", ".join(f"{c.hole} {c.tension / 1e6:.2f} MPa" for c in over)
-    strength = over[0].strength / 1e6
+    parts = []
+    if over:
+        walls = ", ".join(f"{c.hole} {c.tension / 1e6:.2f} MPa" for c in over)
+        parts.append(f"in tension above the tensile strength {over[0].strength / 1e6:.2f} MPa: "
+                     f"{walls}")  # fmt: skip
+    if sheared:
+        walls = ", ".join(f"{c.hole} {c.shear_ratio:.2f}x" for c in sheared)
+        parts.append(f"in shear beyond Mohr-Coulomb (demand over capacity): {walls}")
     return (
-        f"in-situ check: the in-situ stress alone puts these walls in tension above the "
-        f"tensile strength {strength:.2f} MPa (closed form, a long hole in generalised "
-        f"plane strain): {walls}; interfaces there break before injection, and more of them "
-        "as the mesh refines (the strength criterion has no length scale)"
+        "in-situ check (closed form, a long hole in generalised plane strain): the in-situ "
+        f"stress alone puts walls {'; and '.join(parts)}; interfaces there break before "
+        "injection, and more of them as the mesh refines (a strength criterion at a point "
+        "has no length scale: see rock.strength_length)"
     )
 
 
