@@ -59,6 +59,7 @@ _API = {
     "load_study": "hfcdem.workflows.study",
     "run_study": "hfcdem.workflows.study",
     "detect_breakdown": "hfcdem.workflows.breakdown",
+    "in_situ_wall_tension": "hfcdem.workflows.wall_stress",
     "read_results": "hfcdem.io.files",
     "Results": "hfcdem.io.files",
     "SolverError": "hfcdem.solvers",

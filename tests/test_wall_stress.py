@@ -45,3 +45,10 @@ def test_deep_scenes_have_no_wall_in_tension_but_a_wellbore_breakout():
     assert len(field) == 7 and not any(w.exceeds for w in field)
     assert [w.hole for w in field if w.shears] == ["wellbore"]
     assert in_situ_wall_tension(load_scene(SCENES / "sneddon_plate.toml")) == []
+
+
+def test_the_check_is_in_the_public_api():
+    import hfcdem
+
+    assert hfcdem.in_situ_wall_tension is in_situ_wall_tension
+    assert "in_situ_wall_tension" in hfcdem.__all__
