@@ -292,7 +292,7 @@ def _plot_gaps(path: Path, records: Sequence[CaseRecord]) -> None:
         (f"{r.name}: {c.quantity}", 100.0 * c.gap, c.tolerance, c.met)
         for r in records
         for c in r.comparisons
-        if c.gap is not None and c.tolerance is not None
+        if c.gap is not None and c.tolerance is not None and not c.withheld
     ]
     fig, ax = plt.subplots(figsize=(9, 0.8 + 0.32 * max(len(bars), 1)))
     for i, (_, gap, tol, met) in enumerate(bars):

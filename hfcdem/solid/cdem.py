@@ -704,16 +704,14 @@ class CDEMSolid:
         """
         ratio: np.ndarray = np.zeros(self.num_facets)
         mode: np.ndarray = np.full(self.num_facets, FacetState.TENSILE, dtype=np.int8)
-        if self._filter is not None:
-            check = check_failure(*self.filtered_tractions(loads), self.t0, self.c0,
-                                  self.model.friction)  # fmt: skip
-            ratio, mode = check.ratio, check.mode
-        for pts in self.strength_points if self._filter is None else ():
+        if self._filter is not None:  # one filtered stress per facet, no strength points
+            tractions = [self.filtered_tractions(loads)]
+        else:
             # glued facets are zeroed below: recovering their traction here is wasted work
-            snap = self.snapshot(loads, points=pts, recover=False)
-            check = check_failure(
-                snap.normal_traction, snap.shear_traction, self.t0, self.c0, self.model.friction
-            )
+            snaps = (self.snapshot(loads, points=p, recover=False) for p in self.strength_points)
+            tractions = [(snap.normal_traction, snap.shear_traction) for snap in snaps]
+        for tn, tau in tractions:
+            check = check_failure(tn, tau, self.t0, self.c0, self.model.friction)
             worse = check.ratio > ratio
             ratio = np.where(worse, check.ratio, ratio)
             mode = np.where(worse, check.mode, mode)

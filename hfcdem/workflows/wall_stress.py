@@ -76,8 +76,8 @@ def in_situ_wall_tension(scene: Scene) -> list[WallTension]:
     geo, phys = scene.geometry, scene.physics
     if not isinstance(geo, PerforatedBlock) or phys is None:
         return []
-    rock = phys.rock
-    strength = phys.interfaces.tensile_strength
+    rock, model = phys.rock, phys.interfaces
+    strength = model.tensile_strength
     if not math.isfinite(strength):
         return []  # unbreakable interfaces: nothing to warn of
     stress = -phys.stress.tensor(3)  # compression positive
@@ -87,7 +87,6 @@ def in_situ_wall_tension(scene: Scene) -> list[WallTension]:
         (f"perforation {k + 1}", np.asarray(perf.direction), p0)
         for k, perf in enumerate(geo.perforations)
     ]
-    model = phys.interfaces
     out = []
     for name, axis, pressure in holes:
         where, principal = hole_wall_principal_stresses(stress, axis, rock.poisson_ratio, pressure)
