@@ -70,9 +70,21 @@ def test_quick_report_of_sneddon_and_kgd_and_its_resume(shared_tmp_path, capsys)
     assert "| crack-centre u_y |" in (out / "report.md").read_text()
     first = json.loads((out / "cases" / "kgd" / "case.json").read_text())
 
-    # again: every case is done, nothing runs, the wall times are the first run's
+    # the tier's other cases are listed as not run, not left out
+    others = {r["case"]: r for r in _rows(out / "results.csv")}
+    assert others["lab_specimen"]["status"] == "not run"
+    assert "not run yet" in (out / "report.md").read_text()
+
+    # again: every case is done, nothing runs, the wall times are the first run's; the
+    # report still holds griffith (read back, though not named) and lists the rest
     records = run_reproduction(out, tier="quick", only=["sneddon", "kgd"])
-    assert all(r.skipped for r in records)
+    ran = [r for r in records if r.status != "not run"]
+    assert [r.name for r in ran] == ["sneddon", "kgd", "griffith"]
+    assert all(r.skipped for r in ran)
+    assert {r.name for r in records} == {c.name for c in select_cases("quick")}
+    griffith = {r["quantity"]: r for r in _rows(out / "results.csv") if r["case"] == "griffith"}
+    assert griffith["crack-centre opening w"]["met"] == "met"
+    assert "ran only sneddon, kgd" in (out / "report.md").read_text()
     kgd = next(r for r in records if r.name == "kgd")
     assert kgd.wall_time_s == pytest.approx(first["wall_time_s"])
     assert [c.met for c in kgd.comparisons] == [c["met"] for c in first["comparisons"]]
@@ -82,7 +94,7 @@ def test_a_failing_case_is_reported_and_the_report_still_written(shared_tmp_path
     out = shared_tmp_path / "bad"
     argv = ["reproduce", "--quick", "--only", "sneddon", "--resolution", "nosuch", "-o", str(out)]
     assert main(argv) == 4
-    (row,) = _rows(out / "results.csv")
+    (row,) = [r for r in _rows(out / "results.csv") if r["case"] == "sneddon"]
     assert row["status"] == "failed" and "nosuch" in row["case_note"]
     if MPI.COMM_WORLD.rank == 0:
         assert "sneddon" in capsys.readouterr().err

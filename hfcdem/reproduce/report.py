@@ -47,6 +47,7 @@ STATUS_TEXT = {
     "failed": "failed",
     "stopped": "stopped",
     "limit": "ended at the model's validity limit",
+    "not run": "not run yet",
 }
 
 
@@ -110,6 +111,7 @@ def _counts(records: Sequence[CaseRecord]) -> dict[str, int]:
         "cases failed or stopped": sum(1 for r in records if r.status in ("failed", "stopped")),
         "cases at the model's validity limit": sum(1 for r in records if r.status == "limit"),
         "cases not modelled": sum(1 for r in records if r.status == "not modelled"),
+        "cases not run": sum(1 for r in records if r.status == "not run"),
     }
 
 
@@ -182,7 +184,13 @@ def _header(meta: Mapping[str, Any], records: Sequence[CaseRecord]) -> list[str]
         f"Made {meta['date']} at commit {meta['commit']} on {meta['machine']}, "
         f"{meta['ranks']} rank(s); tier {meta['tier']}, fidelity {meta['fidelity']}"
         + (f", every case at resolution {meta['resolution']}" if meta.get("resolution") else "")
-        + f"; {total / 60:.1f} min of case wall time.",
+        + f"; {total / 60:.1f} min of case wall time."
+        + (
+            f" This run ran only {', '.join(meta['only'])}; the other cases are read back "
+            "from earlier runs into the same directory, where they were done."
+            if meta.get("only")
+            else ""
+        ),
         "Rows: " + ", ".join(f"{k}: {v}" for k, v in counts.items()) + ".",
         "A gap is ours relative to the reference. A row with a target is judged; a "
         "trend or ordering row is met when ours goes the paper's way. The resolution is "

@@ -41,7 +41,9 @@ class CaseRecord:
     name: str
     paper: str
     title: str
-    status: str  # "ok", "failed", "stopped", "limit" (the model's validity limit), "not modelled"
+    # "ok", "failed", "stopped", "limit" (the model's validity limit), "not modelled",
+    # "not run" (left out by --only and not done in the report's directory)
+    status: str
     comparisons: tuple[Comparison, ...] = ()
     message: str = ""
     resolution: str = ""
@@ -82,6 +84,11 @@ def run_reproduction(
 ) -> list[CaseRecord]:
     """Run the cases of ``tier`` (or those named in ``only``) into ``output``; return them.
 
+    The report always covers the whole tier: with ``only``, the tier's other
+    cases are read back from ``output`` where they are done (nothing of them
+    runs), and listed as not run where they are not, so a partial rerun never
+    writes a report of a few cases over the whole one.
+
     ``fidelity``: ``scene`` (as each scene file says), ``uniform`` or ``viscous``
     (``solver.fidelity`` of every injection scene) or ``seepage`` (the joints
     fill in time: ``injection.wall_joints``).  ``resolution``: a named mesh
@@ -120,6 +127,20 @@ def _run_all(
     commit = run_tag(comm)["commit"]  # the code this process runs, not HEAD at the end
     clock = _Clock(left=[_estimate(c, c.tiers[tier], out, comm.size) for c in cases])
     records = []
+    others = [c for c in select_cases(tier) if c not in cases] if only else []
+    for case in others:
+        where = out / "cases" / case.name
+        watchdog.beat(f"case {case.name} ({where}): reading it back")
+        record = _run_case(
+            case, case.tiers[tier], where, comm, fidelity, resolution, False, _quiet, read_only=True
+        )
+        records.append(_finish(record, where, out, 0.0, comm))
+    if others:
+        back = sum(1 for r in records if r.status != "not run")
+        say(
+            f"--only: {back} of the tier's {len(others)} other cases read back from {out}; "
+            f"{len(others) - back} not run yet (listed as such in the report)"
+        )
     for i, case in enumerate(cases, start=1):
         est = clock.left.pop(0)
         where = out / "cases" / case.name
@@ -148,6 +169,9 @@ def _run_all(
         )
     meta = run_tag(comm) | {"commit": commit, "tier": tier, "fidelity": fidelity}
     meta["resolution"] = resolution
+    meta["only"] = [c.name for c in cases] if only else None
+    order = {c.name: k for k, c in enumerate(select_cases(tier))}
+    records.sort(key=lambda r: order[r.name])  # the registry's order, as without --only
     if comm.rank == 0:
         from hfcdem.reproduce.report import write_report
 
@@ -187,8 +211,12 @@ def _run_case(
     resolution: str | None,
     force: bool,
     say: Callable[[str], None],
+    read_only: bool = False,
 ) -> CaseRecord:
-    """Run one case and compare it (collective); failures become the record's status."""
+    """Run one case and compare it (collective); failures become the record's status.
+
+    ``read_only``: read the case back only if it is done, else record it "not run".
+    """
     base = CaseRecord(
         case.name,
         case.paper,
@@ -205,7 +233,11 @@ def _run_case(
         say(f"    {msg}")
 
     try:
-        result, text, skipped = _execute(case, tier, where, comm, fidelity, res, force, progress)
+        result, text, skipped = _execute(
+            case, tier, where, comm, fidelity, res, force, progress, read_only
+        )
+    except _NotDone:
+        return _replace(base, status="not run", message="not run yet: name it in --only")
     except CASE_ERRORS as exc:
         return _replace(base, status="failed", message=f"{type(exc).__name__}: {exc}")
     compared: Any = None
@@ -262,8 +294,12 @@ def _execute(
     resolution: str | None,
     force: bool,
     say: Callable[[str], None],
+    read_only: bool = False,
 ) -> tuple[CaseResult, str, bool]:
-    """Run the case's workflow (it skips what is done); return its results and resolution."""
+    """Run the case's workflow (it skips what is done); return its results and resolution.
+
+    ``read_only``: raise :class:`_NotDone` rather than run anything.
+    """
     from hfcdem.config.scene import load_scene
     from hfcdem.workflows.convergence import characteristic_size, load_convergence
     from hfcdem.workflows.convergence import run_convergence as converge
@@ -277,6 +313,7 @@ def _execute(
         if scene.physics.injection is not None and fidelity != "scene":
             scene = load_scene(path, resolution, overrides={**tier.fixed, **_overrides(fidelity)})
         skipped = case_done(where, scene_fingerprint(scene), keep_stopped=True) and not force
+        _check_done(skipped, read_only)
         if skipped:
             summary = json.loads((where / "summary.json").read_text())
         else:
@@ -292,6 +329,7 @@ def _execute(
             study = study.with_fixed(_overrides(fidelity))
         scenes = tuple(study.case_scene(k) for k in range(len(study.values)))
         skipped = not force and _all_done(study, scenes, where, keep_stopped=True)
+        _check_done(skipped, read_only)
         rows = run_study(study, where, comm, force=force, say=say, keep_stopped=True)
         sizes = [characteristic_size(sc) for sc in scenes]
         text = _size_text(sizes[0], study.resolution, rows[0].get("cells"))
@@ -307,11 +345,25 @@ def _execute(
         conv = conv.with_fixed(dict(tier.fixed))
     scenes = tuple(conv.case_scene(k) for k in range(len(conv.values)))
     skipped = not force and _all_done(conv, scenes, where, keep_stopped=False)
+    _check_done(skipped, read_only)
     result = converge(conv, where, comm, force=force, say=say)
     sizes = sorted(characteristic_size(s) * 1e3 for s in scenes)
     text = f"h = {sizes[-1]:.4g} -> {sizes[0]:.4g} mm ({len(sizes)} meshes)"
     estimates = {k: asdict(e) for k, e in result.estimates.items()}
     return CaseResult(where, scenes, rows=result.rows, estimates=estimates), text, skipped
+
+
+def _quiet(msg: str) -> None:
+    """Say nothing: the workflows' lines while a done case is read back."""
+
+
+class _NotDone(Exception):
+    """A case left out by --only has not run in the report's directory."""
+
+
+def _check_done(done: bool, read_only: bool) -> None:
+    if read_only and not done:
+        raise _NotDone
 
 
 def _all_done(study: Any, scenes: Sequence[Any], where: Path, keep_stopped: bool) -> bool:
@@ -333,6 +385,8 @@ def _size_text(h: float, resolution: str | None, cells: Any) -> str:
 def _finish(record: CaseRecord, where: Path, out: Path, spent: float, comm: MPI.Comm) -> CaseRecord:
     """Keep the first run's wall time when the case was done before; write case.json."""
     path = where / "case.json"
+    if record.status == "not run":
+        return record
     if record.skipped or record.status == "not modelled":
         old = comm.bcast(_read(path) if comm.rank == 0 else None, root=0)
         spent = float(old.get("wall_time_s", 0.0)) if old else 0.0
