@@ -248,3 +248,50 @@ def test_a_cascade_stop_names_its_load_and_counts_and_stops_a_coupled_run_too():
     assert "did not settle in 7 iterations at load factor 2.5e+06" in text
     assert "3 facets broke in the cascade, first break at 2e+06" in text
     assert "first break" not in str(CascadeStopped(1.0, 0, 1))
+
+
+def _closings_kept(comm):
+    """Break one set, record closings, break a second set; the facets still holding a closing."""
+    mesh = dolfinx.mesh.create_unit_square(
+        comm, 6, 6, ghost_mode=dolfinx.mesh.GhostMode.shared_facet
+    )
+    empty = np.zeros(0, dtype=np.int32)
+    tags = [dolfinx.mesh.meshtags(mesh, d, empty, empty) for d in (2, 1)]
+    solid = CDEMSolid(
+        TaggedMesh(mesh, tags[0], tags[1], {}, {}),
+        ElasticMaterial(10e9, 0.25),
+        InSituStress(0.0, 0.0),
+        InterfaceModel(),
+    )
+    ids = np.sort(solid.vertex_ids, axis=1)
+    key = ids.sum(axis=1)
+    first = np.flatnonzero((key % 3 == 0) & solid.owned)
+    solid.break_facets(first, np.full(len(first), FacetState.SHEAR), 0.0)
+    solid.states.shut_at[first] = 1e6
+    solid.sync_ghost_states()
+    second = np.flatnonzero((key % 7 == 1) & (solid.state == FacetState.INTACT) & solid.owned)
+    solid.break_facets(second, np.full(len(second), FacetState.TENSILE), 1.0)
+    kept = solid.owned & np.isfinite(solid.states.shut_at)
+    if comm.size == 1:  # every facet of every cell is here: the rule by hand
+        assert np.array_equal(kept, (key % 3 == 0) & ~_near(solid, key))
+    closed = comm.allreduce(len(first), op=MPI.SUM)
+    return sorted(comm.allreduce([tuple(r) for r in ids[kept]], op=MPI.SUM)), closed
+
+
+def _near(solid, key):
+    """Local facets sharing a local cell with a facet of the second set (key % 7 == 1)."""
+    cells = solid.interface_facets.cells
+    new = (key % 7 == 1) & (solid.state == FacetState.TENSILE)
+    touched = np.zeros(cells.max() + 1, dtype=bool)
+    touched[cells[new].reshape(-1)] = True
+    return touched[cells].any(axis=1)
+
+
+def test_a_break_forgets_where_the_facets_of_its_cells_closed_on_any_rank_count():
+    comm = MPI.COMM_WORLD
+    kept, closed = _closings_kept(comm)
+    serial = _closings_kept(MPI.COMM_SELF) if comm.rank == 0 else None
+    serial = comm.bcast(serial, root=0)
+    # some closings forgotten, some kept, the same ones on any rank count
+    assert (kept, closed) == serial
+    assert 0 < len(kept) < closed

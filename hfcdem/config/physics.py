@@ -77,8 +77,8 @@ them so a run's record can print what was assumed.  Any invalid field raises
                                 # (from the cells' stress) reaches this share of its strength
     band_rings = 2              # reduced: vertex rings of neighbours freed with each facet
     contact_hysteresis = true   # a broken interface that closed opens again only once the
-                                # fluid pressure on it passes the one it closed at (no contact
-                                # chatter at fine meshes)
+                                # fluid pressure on it passes the one it closed at, or a facet
+                                # of its cells breaks (no contact chatter at fine meshes)
 """
 
 from __future__ import annotations

@@ -750,12 +750,32 @@ class CDEMSolid:
         # tensile breaks start open, shear breaks closed; update_contact corrects both
         self.states.break_facets(facets, modes)
         self.sync_ghost_states()
+        self._forget_closings_near(facets)
         if self.mode == "reduced":  # the new crack tip's neighbours get springs
             flags = np.zeros(self.num_facets, dtype=bool)
             flags[facets] = True
             self.band.include(flags)
         mids = self.midpoints[facets]
         self.events.append(BreakEvent(load_factor, facets, modes, mids))
+
+    def _forget_closings_near(self, facets: np.ndarray) -> None:
+        """Forget where the facets sharing a cell with the new breaks ``facets`` closed.
+
+        Contact hysteresis keeps a closed facet shut until the fluid passes the
+        pressure it closed at; a break beside it unloads its springs, so that
+        pressure no longer says what holds it shut (collective: the cells'
+        flags are gathered over the ranks, so any rank count forgets the same).
+        """
+        cmap = self.mesh.topology.index_map(self.mesh.topology.dim)
+        vec = dolfinx.la.vector(cmap, 1)
+        vec.array[:] = 0.0
+        vec.array[self.interface_facets.cells[facets].reshape(-1)] = 1.0
+        vec.scatter_reverse(dolfinx.la.InsertMode.add)
+        vec.scatter_forward()
+        near = (vec.array[self.interface_facets.cells] > 0.0).any(axis=1) & self.owned
+        if self.comm.allreduce(bool(np.any(np.isfinite(self.states.shut_at[near]))), MPI.LOR):
+            self.states.shut_at[near] = np.nan
+            self.sync_ghost_states()
 
     def release_facets(self, facets: np.ndarray) -> None:
         """Hold the broken local ``facets`` open from now on (collective).

@@ -157,7 +157,9 @@ class InterfaceStates:
         one refactorisation each way at fine meshes).  A crack that closed as the
         pressure fell reopens as the pressure passes its closing value, as
         without.  Every closing records its pressure in ``shut_at``; an opening
-        clears it.
+        clears it, and so does a break of a facet of either of its cells
+        (:meth:`~hfcdem.solid.cdem.CDEMSolid.break_facets`): the break unloads
+        its springs, so its closing pressure no longer says what holds it shut.
         """
         old = self.contact.copy()
         # closed facets open when their normal traction exceeds the fluid pressure
