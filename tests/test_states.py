@@ -202,8 +202,8 @@ def test_coulomb_decides_stick_or_slip_and_friction_opposes_nothing_else():
     assert s.contact[0] == STICK and s.contact[2] == SLIP
 
 
-def test_ghosts_take_the_owners_states_on_any_rank_count():
-    comm = MPI.COMM_WORLD
+def _square(comm):
+    """A solid on a 6 x 6 unit square, every interior facet an interface, ghosted facets."""
     mesh = dolfinx.mesh.create_unit_square(
         comm, 6, 6, ghost_mode=dolfinx.mesh.GhostMode.shared_facet
     )
@@ -215,6 +215,12 @@ def test_ghosts_take_the_owners_states_on_any_rank_count():
         InSituStress(0.0, 0.0),
         InterfaceModel(),
     )
+    return solid
+
+
+def test_ghosts_take_the_owners_states_on_any_rank_count():
+    comm = MPI.COMM_WORLD
+    solid = _square(comm)
     # each owner breaks facets by a rule of the facet's global vertex ids; ghosts learn it
     ids = np.sort(solid.vertex_ids, axis=1)
     chosen = ids.sum(axis=1) % 3 == 0
@@ -252,17 +258,7 @@ def test_a_cascade_stop_names_its_load_and_counts_and_stops_a_coupled_run_too():
 
 def _closings_kept(comm):
     """Break one set, record closings, break a second set; the facets still holding a closing."""
-    mesh = dolfinx.mesh.create_unit_square(
-        comm, 6, 6, ghost_mode=dolfinx.mesh.GhostMode.shared_facet
-    )
-    empty = np.zeros(0, dtype=np.int32)
-    tags = [dolfinx.mesh.meshtags(mesh, d, empty, empty) for d in (2, 1)]
-    solid = CDEMSolid(
-        TaggedMesh(mesh, tags[0], tags[1], {}, {}),
-        ElasticMaterial(10e9, 0.25),
-        InSituStress(0.0, 0.0),
-        InterfaceModel(),
-    )
+    solid = _square(comm)
     ids = np.sort(solid.vertex_ids, axis=1)
     key = ids.sum(axis=1)
     first = np.flatnonzero((key % 3 == 0) & solid.owned)
