@@ -69,6 +69,8 @@ def test_quick_report_of_sneddon_and_kgd_and_its_resume(shared_tmp_path, capsys)
     assert (out / "figures" / "gaps.png").stat().st_size > 5_000
     assert "| crack-centre u_y |" in (out / "report.md").read_text()
     first = json.loads((out / "cases" / "kgd" / "case.json").read_text())
+    commit = rows[("kgd", "inlet opening")]["commit"]
+    assert first["commit"] == commit and commit in (out / "report.md").read_text()
 
     # the tier's other cases are listed as not run, not left out
     others = {r["case"]: r for r in _rows(out / "results.csv")}
@@ -87,6 +89,7 @@ def test_quick_report_of_sneddon_and_kgd_and_its_resume(shared_tmp_path, capsys)
     assert "ran only sneddon, kgd" in (out / "report.md").read_text()
     kgd = next(r for r in records if r.name == "kgd")
     assert kgd.wall_time_s == pytest.approx(first["wall_time_s"])
+    assert kgd.commit == commit  # the run's, read back
     assert [c.met for c in kgd.comparisons] == [c["met"] for c in first["comparisons"]]
 
 

@@ -39,6 +39,7 @@ COLUMNS = (
     "status",
     "note",
     "case_note",
+    "commit",
 )
 
 
@@ -75,6 +76,7 @@ def _rows(records: Sequence[CaseRecord]) -> list[dict[str, str]]:
                 "wall_time_s": f"{r.wall_time_s:.1f}",
                 "status": r.status,
                 "case_note": "; ".join(x for x in (r.message, r.note) if x),
+                "commit": r.commit,
             }
             if c is not None:
                 row |= {
@@ -195,7 +197,9 @@ def _header(meta: Mapping[str, Any], records: Sequence[CaseRecord]) -> list[str]
         "A gap is ours relative to the reference. A row with a target is judged; a "
         "trend or ordering row is met when ours goes the paper's way. The resolution is "
         "the element size at the cavity or crack; the estimated error is the case's own "
-        "(convergence cases) or what the project measured elsewhere (the case's note).",
+        "(convergence cases) or what the project measured elsewhere (the case's note). "
+        "Each case names the commit of its last run, which may be older than this "
+        "report's when the case was done before and read back.",
     ]
 
 
@@ -220,6 +224,8 @@ def _markdown(
                 facts.append(f"resolution: {r.resolution}")
             if r.wall_time_s:
                 facts.append(f"wall time: {r.wall_time_s:.0f} s")
+            if r.commit:
+                facts.append(f"ran at commit {r.commit}")
             lines += ["; ".join(facts) + ".", ""]
             for text in (r.message, r.note, r.discretisation):
                 if text:
@@ -271,6 +277,8 @@ def _html(
                 parts.append(f"; resolution: {e(r.resolution)}")
             if r.wall_time_s:
                 parts.append(f"; wall time: {r.wall_time_s:.0f} s")
+            if r.commit:
+                parts.append(f"; ran at commit {e(r.commit)}")
             parts.append("</p><ul>")
             parts += [f"<li>{e(t)}</li>" for t in (r.message, r.note, r.discretisation) if t]
             parts.append("</ul>")

@@ -52,6 +52,7 @@ class CaseRecord:
     wall_time_s: float = 0.0
     figures: tuple[str, ...] = ()  # paths relative to the report's directory
     skipped: bool = False
+    commit: str = ""  # the code of the last run into the case ("": not known)
 
 
 @dataclass
@@ -134,7 +135,7 @@ def _run_all(
         record = _run_case(
             case, case.tiers[tier], where, comm, fidelity, resolution, False, _quiet, read_only=True
         )
-        records.append(_finish(record, where, out, 0.0, comm))
+        records.append(_finish(record, where, out, 0.0, comm, commit))
     if others:
         back = sum(1 for r in records if r.status != "not run")
         say(
@@ -155,7 +156,7 @@ def _run_all(
         if record.status in ("ok", "limit") and not record.skipped:
             clock.spent += spent
             clock.estimated += est
-        record = _finish(record, where, out, spent, comm)
+        record = _finish(record, where, out, spent, comm, commit)
         records.append(record)
         met = sum(1 for c in record.comparisons if c.met)
         judged = sum(1 for c in record.comparisons if c.met is not None)
@@ -382,17 +383,20 @@ def _size_text(h: float, resolution: str | None, cells: Any) -> str:
     return f"{resolution or 'default'} (h = {h * 1e3:.4g} mm{cells_text})"
 
 
-def _finish(record: CaseRecord, where: Path, out: Path, spent: float, comm: MPI.Comm) -> CaseRecord:
-    """Keep the first run's wall time when the case was done before; write case.json."""
+def _finish(
+    record: CaseRecord, where: Path, out: Path, spent: float, comm: MPI.Comm, commit: str
+) -> CaseRecord:
+    """Keep the first run's wall time and commit when the case was done before; write case.json."""
     path = where / "case.json"
     if record.status == "not run":
         return record
     if record.skipped or record.status == "not modelled":
         old = comm.bcast(_read(path) if comm.rank == 0 else None, root=0)
         spent = float(old.get("wall_time_s", 0.0)) if old else 0.0
+        commit = str(old.get("commit", "")) if old and record.skipped else ""
     shown = [str(Path(f).relative_to(out)) for f in record.figures if Path(f).exists()]
     figures = tuple(comm.bcast(shown if comm.rank == 0 else None, root=0))
-    record = _replace(record, wall_time_s=spent, figures=figures)
+    record = _replace(record, wall_time_s=spent, figures=figures, commit=commit)
     if record.status != "not modelled":
         prepare_output_dir(where, comm)
         write_json(path, _as_json(record), comm)
