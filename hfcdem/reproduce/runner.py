@@ -88,7 +88,8 @@ def run_reproduction(
     The report always covers the whole tier: with ``only``, the tier's other
     cases are read back from ``output`` where they are done (nothing of them
     runs), and listed as not run where they are not, so a partial rerun never
-    writes a report of a few cases over the whole one.
+    writes a report of a few cases over the whole one.  Only the records of
+    the cases run (or found done) for this call are returned.
 
     ``fidelity``: ``scene`` (as each scene file says), ``uniform`` or ``viscous``
     (``solver.fidelity`` of every injection scene) or ``seepage`` (the joints
@@ -179,7 +180,8 @@ def _run_all(
         write_report(out, records, meta)
     comm.barrier()
     say(f"report: {out / 'report.html'} (and report.md, results.csv, figures/)")
-    return records
+    ran = {c.name for c in cases}
+    return [r for r in records if r.name in ran]
 
 
 def _minutes(seconds: float) -> str:
