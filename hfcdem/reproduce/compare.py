@@ -351,6 +351,21 @@ def _peak_rows(
     return compare
 
 
+#: how far a perforation scene's peak moves from the coarse to the default mesh: No. 2's
+#: highest pressure, 64.11 MPa (coarse) against 63.04 MPa (default, still rising at the end
+#: of the 120 s; benchmarks/README.md, "No. 2, the shipped scene, the whole injection at the
+#: default mesh", 2026-12-04).  Two peaks closer than this are not ordered by the model.
+PEAK_MESH_ERROR = 0.017
+
+#: why an ordering of two such peaks is not judged
+WITHIN_ERROR = f"within the mesh error ({PEAK_MESH_ERROR:.1%} of the peak, No. 2 coarse -> default)"
+
+
+def resolved(a: float, b: float) -> bool:
+    """Whether two peak pressures of perforation scenes differ by more than the mesh error."""
+    return abs(b - a) > PEAK_MESH_ERROR * max(abs(a), abs(b))
+
+
 def _orderings(r: CaseResult, pairs: Sequence[tuple[str, str, str]]) -> list[Comparison]:
     peaks = {str(row["value"]): row.get("peak_pressure_MPa") for row in r.rows}
     short = {str(row["value"]) for row in r.rows if peak_cut_short(row)}
@@ -360,10 +375,11 @@ def _orderings(r: CaseResult, pairs: Sequence[tuple[str, str, str]]) -> list[Com
         if a is None or b is None:
             continue
         bounded = low in short or high in short
+        withheld = LOWER_BOUND if bounded else "" if resolved(a, b) else WITHIN_ERROR
         out.append(
             Comparison(what, b - a, ours_text=f"{a:.2f} vs {b:.2f} MPa",
                        reference_text="holds", agrees=a < b,
-                       source="the paper's ordering", withheld=LOWER_BOUND if bounded else "")
+                       source="the paper's ordering", withheld=withheld)
         )  # fmt: skip
     return out
 
@@ -481,8 +497,12 @@ def _degree_list(values: Mapping[str, tuple[float, float]]) -> str:
 
 
 def _against_breakdown(values: Mapping[str, tuple[float, float]]) -> tuple[int, int]:
-    """Pairs whose lower breakdown has the higher fracture degree, of the pairs compared."""
-    pairs = [(a, b) for a, b in itertools.combinations(values.values(), 2) if a[0] != b[0]]
+    """Pairs whose lower breakdown has the higher fracture degree, of the pairs compared.
+
+    Only pairs whose breakdowns differ by more than the mesh error are compared.
+    """
+    combos = itertools.combinations(values.values(), 2)
+    pairs = [(a, b) for a, b in combos if resolved(a[0], b[0])]
     agree = sum((a[0] < b[0]) == (a[1] > b[1]) for a, b in pairs)
     return agree, len(pairs)
 
@@ -508,8 +528,10 @@ def charge_degrees(r: CaseResult) -> list[Comparison]:
                    reference_text=f"{_shown(largest)} and {_shown(smallest)}",
                    agrees=(top, low) == (largest, smallest), source=source, note=_DEGREE_NOTE),
         Comparison("the lower the breakdown, the higher the fracture degree", agree,
-                   ours_text=f"{agree} of {count} pairs of charges",
-                   reference_text="every charge", agrees=agree == count, source=source),
+                   ours_text=f"{agree} of {count} pairs of charges whose breakdowns differ "
+                   f"by more than {PEAK_MESH_ERROR:.1%}", reference_text="every charge",
+                   agrees=agree == count, source=source,
+                   withheld="" if count else WITHIN_ERROR),
     ]  # fmt: skip
 
 
@@ -536,16 +558,19 @@ def shape_degrees(r: CaseResult) -> list[Comparison]:
     ]  # fmt: skip
     pairs = [(a, b) for a, b in references.SHAPE_SINGLE_CHANGES if a in values and b in values]
     if pairs:
-        agree = [(values[a][0] < values[b][0]) == (values[a][1] > values[b][1]) for a, b in pairs]
+        judged = [(a, b) for a, b in pairs if resolved(values[a][0], values[b][0])]
+        agree = [(values[a][0] < values[b][0]) == (values[a][1] > values[b][1]) for a, b in judged]
         detail = "; ".join(
             f"{a}/{b}: {values[a][0]:.2f}/{values[b][0]:.2f} MPa, "
             f"{100 * values[a][1]:.2f}/{100 * values[b][1]:.2f} %"
+            + ("" if (a, b) in judged else " (within the mesh error)")
             for a, b in pairs
         )
         out.append(
             Comparison("one change of shape: the lower breakdown, the higher degree",
                        sum(agree), ours_text=f"{sum(agree)} of {len(agree)} pairs ({detail})",
-                       reference_text="every pair", agrees=all(agree), source=source)
+                       reference_text="every pair", agrees=all(agree), source=source,
+                       withheld="" if judged else WITHIN_ERROR)
         )  # fmt: skip
     if "1-2" in values and "4-1" in values:
         (p12, d12), (p41, d41) = values["1-2"], values["4-1"]
@@ -553,7 +578,8 @@ def shape_degrees(r: CaseResult) -> list[Comparison]:
             Comparison("model 1-2 below 4-1 in breakdown and fracture degree", None,
                        ours_text=f"{p12:.2f} vs {p41:.2f} MPa, {100 * d12:.2f} vs "
                        f"{100 * d41:.2f} %", reference_text=_paper_12_41(),
-                       agrees=p12 < p41 and d12 < d41, source=source)
+                       agrees=p12 < p41 and d12 < d41, source=source,
+                       withheld="" if resolved(p12, p41) else WITHIN_ERROR)
         )  # fmt: skip
     return out
 
@@ -697,7 +723,9 @@ def peak_against(
 
 __all__ = [
     "DEGREE_FIGURE",
+    "PEAK_MESH_ERROR",
     "STRESS_FIGURE",
+    "WITHIN_ERROR",
     "CaseResult",
     "Comparison",
     "borehole_limit",
@@ -712,6 +740,7 @@ __all__ = [
     "peak_against",
     "peak_cut_short",
     "plot_degrees",
+    "resolved",
     "shape_degrees",
     "shape_study",
     "sneddon",
