@@ -79,6 +79,7 @@ from mpi4py import MPI
 
 from hfcdem.cli import parse_with_petsc_options
 from hfcdem.references import SHAPE_ORDERINGS, SHAPES
+from hfcdem.reproduce.compare import PEAK_MESH_ERROR, resolved
 from hfcdem.workflows.study import breakdown_text, load_study, pick_metric, run_study
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
@@ -91,7 +92,9 @@ ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 # ``perforation_no2.py``).  The cases are ranked by peak pressure, the
 # paper's breakdown, and only when every case cracked.  Each of the paper's
 # six orderings is then checked pair by pair, for the pairs that ran, and
-# printed as holding or not with both pressures.
+# printed as holding or not with both pressures; a pair closer than the mesh
+# error (1.7 %: No. 2's highest pressure moves that much from the coarse to
+# the default mesh) is not decided.
 
 
 # %%
@@ -126,6 +129,8 @@ def main(argv: list[str] | None = None) -> list[dict]:
     for low, high, claim in SHAPE_ORDERINGS:
         if low in ours and high in ours:
             held = "holds" if ours[low] < ours[high] else "does NOT hold"
+            if not resolved(ours[low], ours[high]):
+                held = f"not decided, the two within the mesh error ({PEAK_MESH_ERROR:.1%})"
             say(
                 f"{claim} ({low} < {high}) by {metric}: {held} "
                 f"({ours[low]:.2f} vs {ours[high]:.2f} MPa)"
@@ -139,9 +144,10 @@ def main(argv: list[str] | None = None) -> list[dict]:
 # One line per model, our breakdown next to the paper's, then one line per
 # ordering.  README ("Perforation scenes") has the coarse runs: every peak
 # between about 62 and 65 MPa, near Sh + T0, so the paper's spread of 54 to
-# 69 MPa is not reproduced.  Most of the paper's orderings hold there, some
-# by a few tenths of a MPa or less, and "No. 2 below the equal-volume
-# cylinder" does not.  With soaked joints the breakdown is a pressure to
+# 69 MPa is not reproduced.  Only one of the paper's orderings is decided
+# there, the large cylinder below No. 2 (62.42 against 64.15 MPa), and it
+# holds; the others differ by a few tenths of a MPa, less than the mesh
+# error.  With soaked joints the breakdown is a pressure to
 # push cracks through the rock, and the tunnel's shape changes it little.
 # ``study.png`` draws breakdown and fracture degree per model; each model's
 # folder has its pictures.
