@@ -208,6 +208,25 @@ def test_comparison_rows_judge_gaps_and_trends(tmp_path):
     assert lonely.met is False and "fewer than two" in lonely.note
 
 
+@pytest.mark.serial
+def test_the_shear_share_trend_counts_failures(tmp_path):
+    rows = (
+        {"x": 5e-7, "tensile_failures": 103, "shear_failures": 1},
+        {"x": 8e-6, "tensile_failures": 140, "shear_failures": 21},
+        {"x": 2e-6, "tensile_failures": 136, "shear_failures": 24},
+        {"x": 1e-5, "tensile_failures": math.nan, "shear_failures": math.nan},  # a ramp's row
+        {"x": 1e-4, "tensile_failures": 0, "shear_failures": 0},  # nothing broke
+    )
+    (row,) = trend("s", "rises", True, 1e6, "cm3/s", shear_share=True)(
+        CaseResult(tmp_path, (), rows=rows)
+    )
+    assert row.met and row.ours == pytest.approx(21 / 161 - 1 / 104)
+    assert row.ours_text == "rises 1% -> 13% (0.5 -> 8 cm3/s; 1 of 104, 24 of 160, 21 of 161)"
+    assert row.note == "1 step(s) against the trend"
+    (row,) = trend("s", "falls", False, 1.0, "", True)(CaseResult(tmp_path, (), rows=rows[3:]))
+    assert row.met is False and "fewer than two" in row.note
+
+
 def _study(tmp_path, peaks, degrees):
     rows = [
         {"value": k, "peak_pressure_MPa": peaks[k], "fracture_degree": degrees.get(k)}

@@ -223,27 +223,56 @@ def _pressure(row: Mapping[str, Any]) -> float | None:
     return None
 
 
+def _shear_share(row: Mapping[str, Any]) -> tuple[int, int] | None:
+    """Return a case's shear failures and all its failures, or None when it has none."""
+    t, s = row.get("tensile_failures"), row.get("shear_failures")
+    if not (isinstance(t, int | float) and isinstance(s, int | float)):
+        return None
+    if not (math.isfinite(t) and math.isfinite(s)) or t + s <= 0:
+        return None
+    return int(s), int(t) + int(s)
+
+
 def trend(
-    quantity: str, paper_text: str, paper_rises: bool, unit_scale: float, unit: str
+    quantity: str,
+    paper_text: str,
+    paper_rises: bool,
+    unit_scale: float,
+    unit: str,
+    shear_share: bool = False,
 ) -> Callable[[CaseResult], list[Comparison]]:
-    """Compare a trend of breakdown against the swept value with the paper's direction."""
+    """Compare a trend against the swept value with the paper's direction.
+
+    The trend is of the breakdown (the gap: its relative change), or with
+    ``shear_share`` of the share of the failures that are in shear (the gap: the
+    change of that share).
+    """
 
     def compare(r: CaseResult) -> list[Comparison]:
-        found = [(_x(row), _pressure(row)) for row in r.rows]
+        if shear_share:
+            counts = {_x(row): _shear_share(row) for row in r.rows}
+            found = [(x, c[0] / c[1] if c else None) for x, c in counts.items()]
+        else:
+            found = [(_x(row), _pressure(row)) for row in r.rows]
         pts = sorted((x, p) for x, p in found if p is not None)
         if len(pts) < 2:
             return [Comparison(quantity, None, reference_text=paper_text, agrees=False,
                                note="fewer than two cases broke")]  # fmt: skip
         (x0, p0), (x1, p1) = pts[0], pts[-1]
         rises = p1 > p0
-        ours = (
-            f"{'rises' if rises else 'falls'} {p1 / p0 - 1:+.1%} "
-            f"({p0:.2f} -> {p1:.2f} MPa, {x0 * unit_scale:g} -> {x1 * unit_scale:g} {unit})"
-        )
+        span = f"{x0 * unit_scale:g} -> {x1 * unit_scale:g} {unit}"
+        if shear_share:
+            each = ", ".join(f"{c[0]} of {c[1]}" for x, _ in pts if (c := counts[x]))
+            ours = f"{'rises' if rises else 'falls'} {p0:.0%} -> {p1:.0%} ({span}; {each})"
+            change = p1 - p0
+        else:
+            verb = "rises" if rises else "falls"
+            ours = f"{verb} {p1 / p0 - 1:+.1%} ({p0:.2f} -> {p1:.2f} MPa, {span})"
+            change = p1 / p0 - 1.0
         steps = sum((b > a) != rises for (_, a), (_, b) in itertools.pairwise(pts))
         note = "monotone" if steps == 0 else f"{steps} step(s) against the trend"
         return [
-            Comparison(quantity, p1 / p0 - 1.0, ours_text=ours, reference_text=paper_text,
+            Comparison(quantity, change, ours_text=ours, reference_text=paper_text,
                        agrees=rises == paper_rises, note=note)
         ]  # fmt: skip
 
