@@ -391,8 +391,16 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
         a2.set_ylabel("at the first break (%)")
         a2.legend()
     else:
-        a2.plot(xs, [_num(r.get("fracture_degree")) for r in rows], "o-")
+        a2.plot(xs, [_num(r.get("fracture_degree")) for r in rows], "o-", label="fracture degree")
         a2.set_ylabel("fracture degree")
+        counts = [(_num(r.get("tensile_failures")), _num(r.get("shear_failures"))) for r in rows]
+        if any(t + s > 0 for t, s in counts):  # NaN sums compare False
+            a3 = a2.twinx()
+            shear = [100 * s / (t + s) if t + s > 0 else float("nan") for t, s in counts]
+            a3.plot(xs, shear, "^:", color="C1", label="shear share of the failures")
+            a3.set_ylabel("failures in shear (%)")
+            lines = a2.get_lines() + a3.get_lines()
+            a2.legend(lines, [str(ln.get_label()) for ln in lines])
     _label_axes((a1, a2), study, rows, xs, categorical)
     a1.legend()
     fig.suptitle(study.name)
