@@ -1,5 +1,7 @@
 """`hfcdem study`: a sweep of one scene field, cases skipped when done."""
 
+from pathlib import Path
+
 import pytest
 from mpi4py import MPI
 
@@ -133,3 +135,20 @@ def test_a_static_study_tables_the_opening_and_converges_in_alpha(shared_tmp_pat
     lines = (out / "results.csv").read_text().splitlines()
     assert lines[0].startswith("value,case,x,max_crack_opening_m,sneddon_centre_relative_error")
     assert (out / "study.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize(
+    "path",
+    sorted(Path(__file__).resolve().parents[1].joinpath("studies").glob("*.toml")),
+    ids=lambda p: p.stem,
+)
+def test_every_shipped_study_file_loads_with_every_case_valid(path):
+    import tomllib
+
+    from hfcdem.workflows.convergence import load_convergence
+
+    kind = tomllib.loads(path.read_text()).get("kind", "sweep")
+    study = (load_convergence if kind == "convergence" else load_study)(path)
+    assert len(study.values) >= 2
+    scenes = [study.case_scene(k) for k in range(len(study.values))]
+    assert len({repr(s) for s in scenes}) == len(scenes)  # each case a different scene
