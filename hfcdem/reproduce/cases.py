@@ -360,6 +360,26 @@ CASES: tuple[Case, ...] = (
         figures=("study.png",),
     ),
     Case(
+        "shear_weibull",
+        "dem-lbm",
+        "Shear share of the failures against Weibull modulus m (pumped borehole)",
+        "study",
+        "studies/borehole_pumping_shear_weibull.toml",
+        {"quick": Tier(None, estimate_s=75), "full": Tier(None, estimate_s=75)},
+        trend(
+            "shear share of the failures against Weibull m",
+            "falls sharply as the rock gets more homogeneous, larger m; 41 % (32 of 78) at "
+            "m = 2 (sec. 3.4, Fig. 18)",
+            False,
+            1.0,
+            "",
+            shear_share=True,
+        ),
+        discretisation="not measured (coarse, a/5 at the wall)",
+        note="as shear_rate, at 2 cm3/s per m; one realisation per m",
+        figures=("study.png",),
+    ),
+    Case(
         "lab_specimen",
         "perforation",
         "Lab specimen, azimuth 30/45/60 deg (sec. 3.2)",
