@@ -260,7 +260,7 @@ def trend(
                                note="fewer than two cases broke")]  # fmt: skip
         (x0, p0), (x1, p1) = pts[0], pts[-1]
         rises = p1 > p0
-        span = f"{x0 * unit_scale:g} -> {x1 * unit_scale:g} {unit}"
+        span = f"{x0 * unit_scale:g} -> {x1 * unit_scale:g} {unit}".rstrip()
         if shear_share:
             each = ", ".join(f"{c[0]} of {c[1]}" for x, _ in pts if (c := counts[x]))
             ours = f"{'rises' if rises else 'falls'} {p0:.0%} -> {p1:.0%} ({span}; {each})"
