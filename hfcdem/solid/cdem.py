@@ -766,6 +766,9 @@ class CDEMSolid:
         pressure no longer says what holds it shut (collective: the cells'
         flags are gathered over the ranks, so any rank count forgets the same).
         """
+        closed = bool(np.any(np.isfinite(self.states.shut_at[self.owned])))
+        if not self.comm.allreduce(closed, MPI.LOR):  # no closing kept: nothing to forget
+            return
         cmap = self.mesh.topology.index_map(self.mesh.topology.dim)
         vec = dolfinx.la.vector(cmap, 1)
         vec.array[:] = 0.0
@@ -773,9 +776,8 @@ class CDEMSolid:
         vec.scatter_reverse(dolfinx.la.InsertMode.add)
         vec.scatter_forward()
         near = (vec.array[self.interface_facets.cells] > 0.0).any(axis=1) & self.owned
-        if self.comm.allreduce(bool(np.any(np.isfinite(self.states.shut_at[near]))), MPI.LOR):
-            self.states.shut_at[near] = np.nan
-            self.sync_ghost_states()
+        self.states.shut_at[near] = np.nan
+        self.sync_ghost_states()
 
     def release_facets(self, facets: np.ndarray) -> None:
         """Hold the broken local ``facets`` open from now on (collective).
