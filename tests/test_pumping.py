@@ -202,9 +202,10 @@ def test_a_pressure_that_only_falls_has_no_breakdown(plate):
 def test_a_cascade_of_breaks_is_not_a_state_loop_that_does_not_settle(plate):
     """The breakdown step breaks 20 facets, one per pass: the budget counts passes per break.
 
-    With 4 passes allowed between two breaks the run is the default run to the
-    last digit; counted over the whole step (the old rule) it stopped at the
-    breakdown with 1 of the 20 facets broken.
+    With 4 passes allowed between two breaks the run is the default run to its
+    round-off (on 2 ranks two identical runs differ by 2e-14, the order of the
+    parallel sums); counted over the whole step (the old rule) it stopped at
+    the breakdown with 1 of the 20 facets broken.
     """
     pumping = CavityPumping(Q, 40.0, steps=100)
     default = _pump(plate, 1e-9)
@@ -212,7 +213,8 @@ def test_a_cascade_of_breaks_is_not_a_state_loop_that_does_not_settle(plate):
         _solid(plate), WALL, Fluid(viscosity=1.0), 1e-9, pumping, max_state_iterations=4
     )
     assert tight.stopped is None
-    assert tight.breakdown == default.breakdown and tight.steps == default.steps
+    assert tight.breakdown == pytest.approx(default.breakdown, rel=1e-12)
+    assert tight.steps == default.steps
     assert (tight.tensile, tight.shear) == (default.tensile, default.shear) == (20, 0)
 
 
