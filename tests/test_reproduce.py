@@ -17,6 +17,7 @@ from hfcdem.reproduce.compare import (
     WITHIN_ERROR,
     CaseResult,
     Comparison,
+    all_tensile,
     charge_degrees,
     failure_modes,
     first_cracks,
@@ -225,6 +226,26 @@ def test_the_shear_share_trend_counts_failures(tmp_path):
     assert row.note == "1 step(s) against the trend"
     (row,) = trend("s", "falls", False, 1.0, "", True)(CaseResult(tmp_path, (), rows=rows[3:]))
     assert row.met is False and "fewer than two" in row.note
+
+
+@pytest.mark.serial
+def test_all_tensile_allows_an_insignificant_shear_share(tmp_path):
+    """DEM-LBM sec. 3.5: "all tensile" at every value holds up to 5 % of failures in shear."""
+    rows = (
+        {"x": 2e-5, "tensile_failures": 96, "shear_failures": 4},
+        {"x": 1e-6, "tensile_failures": 100, "shear_failures": 0},
+        {"x": 5e-6, "tensile_failures": 0, "shear_failures": 0},  # nothing broke
+    )
+    (row,) = all_tensile("s", "all tensile", 1e6, "um")(CaseResult(tmp_path, (), rows=rows))
+    assert row.met and row.ours == pytest.approx(0.04)
+    assert row.ours_text == (
+        "largest shear share 4% (1 -> 20 um; 0 of 100, 4 of 100); 1 case(s) did not break"
+    )
+    over = ({"x": 1e-6, "tensile_failures": 94, "shear_failures": 6}, *rows[:1])
+    (row,) = all_tensile("s", "all tensile", 1e6, "um")(CaseResult(tmp_path, (), rows=over))
+    assert row.met is False and row.ours == pytest.approx(0.06)
+    (row,) = all_tensile("s", "all tensile", 1e6, "um")(CaseResult(tmp_path, (), rows=rows[2:]))
+    assert row.met is False and row.note == "no case broke"
 
 
 def _study(tmp_path, peaks, degrees):

@@ -21,6 +21,7 @@ from hfcdem.reproduce.compare import (
     STRESS_FIGURE,
     CaseResult,
     Comparison,
+    all_tensile,
     borehole_limit,
     four_charges,
     griffith,
@@ -377,6 +378,25 @@ CASES: tuple[Case, ...] = (
         ),
         discretisation="not measured (coarse, a/5 at the wall)",
         note="as shear_rate, at 2 cm3/s per m; one realisation per m",
+        figures=("study.png",),
+    ),
+    Case(
+        "shear_permeability",
+        "dem-lbm",
+        "Shear share of the failures against the joints' permeability (pumped borehole)",
+        "study",
+        "studies/borehole_pumping_shear_permeability.toml",
+        {"quick": Tier(None, estimate_s=120), "full": Tier(None, estimate_s=120)},
+        all_tensile(
+            "shear share of the failures against permeability",
+            "all tensile, insignificant shear strain, at every permeability (sec. 3.5, "
+            "Figs. 20-21)",
+            1e6,
+            "um",
+        ),
+        discretisation="not measured (coarse, a/5 at the wall)",
+        note="as shear_rate, at 2 cm3/s per m; the joints' aperture sets their cubic-law "
+        "permeability",
         figures=("study.png",),
     ),
     Case(

@@ -233,6 +233,46 @@ def _shear_share(row: Mapping[str, Any]) -> tuple[int, int] | None:
     return int(s), int(t) + int(s)
 
 
+def _shear_shares(
+    r: CaseResult,
+) -> tuple[dict[float, tuple[int, int] | None], list[tuple[float, float]]]:
+    """Each case's (shear, all) failure counts by swept value; the shares of those that broke."""
+    counts = {_x(row): _shear_share(row) for row in r.rows}
+    return counts, sorted((x, c[0] / c[1]) for x, c in counts.items() if c)
+
+
+#: the largest share of failures in shear that a paper's "all tensile, insignificant
+#: shear" allows (our rate sweep's lowest rate, which the paper calls all tensile: 1 %)
+INSIGNIFICANT_SHEAR = 0.05
+
+
+def all_tensile(
+    quantity: str, paper_text: str, unit_scale: float, unit: str
+) -> Callable[[CaseResult], list[Comparison]]:
+    """Judge a paper's "all tensile at every value": every case at most INSIGNIFICANT_SHEAR."""
+
+    def compare(r: CaseResult) -> list[Comparison]:
+        counts, pts = _shear_shares(r)
+        if not pts:
+            return [Comparison(quantity, None, reference_text=paper_text, agrees=False,
+                               note="no case broke")]  # fmt: skip
+        worst = max(p for _, p in pts)
+        span = f"{pts[0][0] * unit_scale:g} -> {pts[-1][0] * unit_scale:g} {unit}".rstrip()
+        each = ", ".join(f"{c[0]} of {c[1]}" for x, _ in pts if (c := counts[x]))
+        unbroken = len(counts) - len(pts)
+        ours = f"largest shear share {worst:.0%} ({span}; {each})" + (
+            f"; {unbroken} case(s) did not break" if unbroken else ""
+        )
+        return [
+            Comparison(quantity, worst, ours_text=ours, reference_text=paper_text,
+                       agrees=worst <= INSIGNIFICANT_SHEAR,
+                       note=f"all tensile: at most {INSIGNIFICANT_SHEAR:.0%} of the failures "
+                       "in shear in every case")
+        ]  # fmt: skip
+
+    return compare
+
+
 def trend(
     quantity: str,
     paper_text: str,
@@ -250,11 +290,10 @@ def trend(
 
     def compare(r: CaseResult) -> list[Comparison]:
         if shear_share:
-            counts = {_x(row): _shear_share(row) for row in r.rows}
-            found = [(x, c[0] / c[1] if c else None) for x, c in counts.items()]
+            counts, pts = _shear_shares(r)
         else:
-            found = [(_x(row), _pressure(row)) for row in r.rows]
-        pts = sorted((x, p) for x, p in found if p is not None)
+            pts = sorted((x, p) for x, p in ((_x(row), _pressure(row)) for row in r.rows)
+                         if p is not None)  # fmt: skip
         if len(pts) < 2:
             return [Comparison(quantity, None, reference_text=paper_text, agrees=False,
                                note="fewer than two cases broke")]  # fmt: skip
@@ -752,11 +791,13 @@ def peak_against(
 
 __all__ = [
     "DEGREE_FIGURE",
+    "INSIGNIFICANT_SHEAR",
     "PEAK_MESH_ERROR",
     "STRESS_FIGURE",
     "WITHIN_ERROR",
     "CaseResult",
     "Comparison",
+    "all_tensile",
     "borehole_limit",
     "charge_degrees",
     "failure_modes",
