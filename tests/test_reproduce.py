@@ -13,6 +13,7 @@ from hfcdem.reproduce.cases import CASES, select_cases
 from hfcdem.reproduce.compare import (
     DEGREE_FIGURE,
     PEAK_MESH_ERROR,
+    SHARE_NOT_CONVERGED,
     STRESS_FIGURE,
     WITHIN_ERROR,
     CaseResult,
@@ -221,9 +222,16 @@ def test_the_shear_share_trend_counts_failures(tmp_path):
     (row,) = trend("s", "rises", True, 1e6, "cm3/s", shear_share=True)(
         CaseResult(tmp_path, (), rows=rows)
     )
-    assert row.met and row.ours == pytest.approx(21 / 161 - 1 / 104)
+    assert row.ours == pytest.approx(21 / 161 - 1 / 104)
     assert row.ours_text == "rises 1% -> 13% (0.5 -> 8 cm3/s; 1 of 104, 24 of 160, 21 of 161)"
     assert row.note == "1 step(s) against the trend"
+    # 12 points, less than the share moves between meshes: the paper's way, not judged
+    assert row.agrees and row.met is None and row.withheld == SHARE_NOT_CONVERGED
+    wide = ({**rows[0], "shear_failures": 0}, {**rows[1], "shear_failures": 70})
+    (row,) = trend("s", "rises", True, 1e6, "cm3/s", shear_share=True)(
+        CaseResult(tmp_path, (), rows=wide)
+    )
+    assert row.ours == pytest.approx(70 / 210) and row.met and not row.withheld
     (row,) = trend("s", "falls", False, 1.0, "", True)(CaseResult(tmp_path, (), rows=rows[3:]))
     assert row.met is False and "fewer than two" in row.note
 

@@ -41,6 +41,12 @@ from hfcdem.reproduce.kgd_series import (
 from hfcdem.reproduce.rubin import rubin
 from hfcdem.reproduce.saturation import SATURATION_FIGURE, SEEPAGE_RUNG, saturation_in_time
 
+#: what the shear-share cases' mesh does to their answer (benchmarks/README, 2026-12-05)
+_SHARE_MESHES = (
+    "coarse (a/5 at the wall); at point strength the share grows with the mesh: 15 / 21 / "
+    "41 % at a/5 / a/10 / a/20 (2 cm3/s per m)"
+)
+
 TIERS = ("quick", "full")
 FIDELITIES = ("scene", "uniform", "viscous", "seepage")
 
@@ -336,7 +342,7 @@ CASES: tuple[Case, ...] = (
             "cm3/s per m",
             shear_share=True,
         ),
-        discretisation="not measured (coarse, a/5 at the wall)",
+        discretisation=_SHARE_MESHES,
         note="the DEM-LBM set-up where it bears on the failure mode: no in-situ stress, "
         "shear strength 2.1 times the tensile one (its B_t / B_n), no friction",
         figures=("study.png",),
@@ -356,7 +362,7 @@ CASES: tuple[Case, ...] = (
             "Pa s",
             shear_share=True,
         ),
-        discretisation="not measured (coarse, a/5 at the wall)",
+        discretisation=_SHARE_MESHES,
         note="as shear_rate, at 2 cm3/s per m",
         figures=("study.png",),
     ),
@@ -376,7 +382,7 @@ CASES: tuple[Case, ...] = (
             "",
             shear_share=True,
         ),
-        discretisation="not measured (coarse, a/5 at the wall)",
+        discretisation=_SHARE_MESHES,
         note="as shear_rate, at 2 cm3/s per m; one realisation per m",
         figures=("study.png",),
     ),
@@ -394,7 +400,7 @@ CASES: tuple[Case, ...] = (
             1e6,
             "um",
         ),
-        discretisation="not measured (coarse, a/5 at the wall)",
+        discretisation=_SHARE_MESHES,
         note="as shear_rate, at 2 cm3/s per m; the joints' aperture sets their cubic-law "
         "permeability",
         figures=("study.png",),
