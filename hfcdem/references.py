@@ -11,6 +11,9 @@ from __future__ import annotations
 # sec. 3.2, Fig. 9: lab specimen of Jiang et al., azimuth (deg) -> MPa
 LAB_MEASURED = {30: 10.39, 45: 10.55, 60: 15.55}
 LAB_PAPER_SIMULATED = {30: 10.46, 45: 10.65, 60: 15.64}
+#: the azimuth (deg) whose fracture the paper draws past the perforations, turning toward
+#: SH (its Fig. 8, sec. 3.2)
+LAB_TURN_AZIMUTH = 60
 
 # sec. 3.3: field cluster (Changqing oilfield)
 FIELD_MEASURED = 43.0
@@ -77,6 +80,7 @@ __all__ = [
     "FIELD_PAPER_SIMULATED",
     "LAB_MEASURED",
     "LAB_PAPER_SIMULATED",
+    "LAB_TURN_AZIMUTH",
     "PFC2D_RATE",
     "PFC2D_STRESS_RATIO",
     "PFC2D_VISCOSITY",

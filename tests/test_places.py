@@ -8,10 +8,12 @@ from mpi4py import MPI
 from tiny_solid import unit_block
 
 from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
+from hfcdem.config.scene import load_scene
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.workflows.places import (
     stress_along_tunnels,
     tunnel_place,
+    turn_past_tips,
     wall_distances,
     wellbore_place,
 )
@@ -55,6 +57,25 @@ def test_distances_are_across_the_wellbore_axis():
 def test_the_tunnels_thirds_name_the_places():
     places = [tunnel_place(d, 0.23) for d in (0.0, 0.07, 0.1225, 0.2, 0.23, 0.3)]
     assert places == ["root", "root", "middle", "far end", "far end", "beyond the tip"]
+
+
+def test_the_turn_past_the_tips_is_measured_from_sh():
+    """The lab at 60 deg: tunnels from r = 10 to 40 mm; what lies past r = 40 mm is judged."""
+    scene = load_scene("meshes/scenes/lab_specimen_60deg.toml", "coarse")
+
+    def at(r, deg, z=0.001):
+        return [r * np.cos(np.radians(deg)), r * np.sin(np.radians(deg)), z]
+
+    inside = [at(0.03, 10.0)]  # beside a tunnel: not past its tip
+    past = [at(0.045, 60.0), at(0.05, 230.0), at(0.048, 250.0)]  # the second tunnel is at 240
+    turn = turn_past_tips(scene, np.array(inside + past), np.array([5.0, 1.0, 2.0, 1.0]))
+    assert turn["past_tip"] == 3
+    assert turn["farthest_past_tip_m"] == pytest.approx(0.01)
+    assert turn["turn_deg"] == pytest.approx((0.0 + 2 * 10.0 - 10.0) / 4.0)
+    assert turn["cell_angle_deg"] == pytest.approx(np.degrees(0.002 / 0.04))
+    none = turn_past_tips(scene, np.array(inside), np.ones(1))
+    assert none["past_tip"] == 0 and none["turn_deg"] is None
+    assert turn_past_tips(perforated(), np.zeros((1, 3)), np.ones(1)) is None  # not a block
 
 
 @pytest.mark.parametrize("strain", [-1e-4, 5e-4])

@@ -150,6 +150,21 @@ def read_pvd(path: Path) -> list[tuple[float, str]]:
     return [(float(m[1]), m[2]) for m in pattern.finditer(path.read_text())]
 
 
+def read_facets(path: Path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    """Centroids, sizes (areas; lengths in 2D) and cell data of the facets of one VTU file."""
+    import meshio
+
+    mesh = meshio.read(path)
+    corners = mesh.points[mesh.cells[0].data]
+    edge = corners[:, 1] - corners[:, 0]
+    if corners.shape[1] == 3:
+        size = 0.5 * np.linalg.norm(np.cross(edge, corners[:, 2] - corners[:, 0]), axis=1)
+    else:
+        size = np.linalg.norm(edge, axis=1)
+    data = {k: np.asarray(v[0]) for k, v in mesh.cell_data.items()}
+    return corners.mean(axis=1), size, data
+
+
 def output_times(t_start: float, t_end: float, interval: float) -> np.ndarray:
     """Return the output times k * interval after ``t_start``, and ``t_end``.
 
@@ -168,4 +183,5 @@ __all__ = [
     "InterfaceFrames",
     "PvdFrames",
     "output_times",
+    "read_facets",
 ]

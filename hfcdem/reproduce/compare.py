@@ -20,12 +20,15 @@ import numpy as np
 from hfcdem import references
 from hfcdem.analytic import kgd_viscosity
 from hfcdem.config.geometry import Scene
+from hfcdem.io.series import read_facets
 from hfcdem.workflows.places import (
     STRESS_FIGURE,
     plot_stress_along_tunnels,
     tunnel_length,
     tunnel_place,
+    turn_past_tips,
 )
+from hfcdem.workflows.study import case_directory
 
 
 @dataclass(frozen=True)
@@ -392,6 +395,9 @@ def lab_specimen(r: CaseResult) -> list[Comparison]:
                        f"{references.LAB_PAPER_SIMULATED[azimuth]} MPa",
                        withheld=LOWER_BOUND if short else "")
         )  # fmt: skip
+    for k, row in enumerate(r.rows):
+        if round(math.degrees(_x(row))) == references.LAB_TURN_AZIMUTH and k < len(r.scenes):
+            out.extend(_lab_turn(r.scenes[k], r.directory / case_directory(k, row["value"])))
     if ours and all(p is not None for p in ours):
         rising = all(a < b for a, b in itertools.pairwise(ours))  # type: ignore[operator]
         bounded = any(shorts)
@@ -401,6 +407,34 @@ def lab_specimen(r: CaseResult) -> list[Comparison]:
                        withheld=LOWER_BOUND if bounded else "")
         )  # fmt: skip
     return out
+
+
+def _lab_turn(scene: Scene, directory: Path) -> list[Comparison]:
+    """Whether the broken interfaces past the tunnels' tips turn toward SH (Fig. 8)."""
+    path = directory / "fracture.vtu"
+    if not path.exists():
+        return []
+    centroids, areas, _ = read_facets(path)
+    turn = turn_past_tips(scene, centroids, areas)
+    if turn is None:
+        return []
+    cell = turn["cell_angle_deg"]
+    if turn["turn_deg"] is None:
+        ours, agrees = "no broken interface past the tunnels' tips", False
+    else:
+        ours = (
+            f"{turn['past_tip']} broken interfaces past the tips, up to "
+            f"{1e3 * turn['farthest_past_tip_m']:.1f} mm; {turn['turn_deg']:+.1f} deg toward "
+            f"SH (area-weighted; one cell at the tips: {cell:.1f} deg)"
+        )
+        agrees = turn["turn_deg"] > cell
+    return [
+        Comparison(f"fracture past the tunnels turns toward SH at "
+                   f"{references.LAB_TURN_AZIMUTH} deg", turn["turn_deg"], unit="deg",
+                   ours_text=ours, reference_text="grows along the perforation, then turns "
+                   "toward SH (Fig. 8)", agrees=agrees, source="the paper's Fig. 8, sec. 3.2",
+                   note="turned: by more than the angle one cell subtends at the tips")
+    ]  # fmt: skip
 
 
 def _peak_rows(

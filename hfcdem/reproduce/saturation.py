@@ -20,7 +20,7 @@ import numpy as np
 
 from hfcdem import references
 from hfcdem.config.geometry import Scene
-from hfcdem.io.series import read_pvd
+from hfcdem.io.series import read_facets, read_pvd
 from hfcdem.reproduce.compare import CaseResult, Comparison, peak_against
 
 #: the figure the case draws into its directory
@@ -56,12 +56,8 @@ def filling_times(history: Path) -> dict[float, float | None]:
 
 def _frame(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Centroids, areas and saturations of the interfaces of one VTU frame."""
-    import meshio
-
-    mesh = meshio.read(path)
-    tri = mesh.points[mesh.cells[0].data]
-    area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
-    return tri.mean(axis=1), area, np.asarray(mesh.cell_data["saturation"][0], dtype=float)
+    centroids, areas, data = read_facets(path)
+    return centroids, areas, np.asarray(data["saturation"], dtype=float)
 
 
 def plot_saturation(directory: Path, scene: Scene, path: Path) -> bool:

@@ -18,6 +18,7 @@ import dolfinx
 import numpy as np
 from mpi4py import MPI
 
+from hfcdem.config.geometry import PerforatedBlock
 from hfcdem.config.scene import Scene
 from hfcdem.io.sampling import interpolate_expression
 
@@ -76,6 +77,52 @@ def tunnel_place(distance: float, length: float) -> str:
     if distance <= 2.0 * length / 3.0:
         return "middle"
     return "far end" if distance <= length else "beyond the tip"
+
+
+def _from_sh(v: np.ndarray) -> np.ndarray:
+    """Angle (deg) of each row of ``v`` from the SH axis (x), folded into 0-90."""
+    norm = np.linalg.norm(v, axis=1)
+    return np.degrees(np.arccos(np.clip(np.abs(v[:, 0]) / np.maximum(norm, 1e-300), 0.0, 1.0)))
+
+
+def turn_past_tips(scene: Scene, centroids: np.ndarray, areas: np.ndarray) -> dict[str, Any] | None:
+    """How the broken interfaces beyond the tunnels' tips turn toward SH (the paper's Fig. 8).
+
+    For each interface farther from the wellbore wall than the tunnels are long,
+    the angle from SH (x) of its direction across the wellbore axis, against that
+    of the tunnel it lies nearest in direction: ``turn_deg`` is their
+    area-weighted mean difference (positive: nearer SH than the tunnel).  Also
+    ``past_tip`` (how many), ``farthest_past_tip_m`` and ``cell_angle_deg``, the
+    angle one cell of the scene's finest size subtends at the tips.  None
+    without tunnels, or when the wellbore runs along SH.
+    """
+    from hfcdem.mesh.frames import tunnel_frame
+
+    geom = scene.geometry
+    if not isinstance(geom, PerforatedBlock) or not geom.perforations:
+        return None
+    wellbore, length = geom.wellbore, tunnel_length(scene) or 0.0
+    if wellbore.axis == "x":
+        return None
+    pts = np.atleast_2d(np.asarray(centroids, dtype=float))
+    across = pts.copy()
+    across[:, "xyz".index(wellbore.axis)] = 0.0
+    distance = np.linalg.norm(across, axis=1) - wellbore.radius
+    past = distance > length
+    tip_radius = wellbore.radius + length
+    out: dict[str, Any] = {
+        "past_tip": int(past.sum()),
+        "farthest_past_tip_m": float(max(distance.max(initial=length) - length, 0.0)),
+        "cell_angle_deg": float(np.degrees(geom.mesh.size / tip_radius)),
+        "turn_deg": None,
+    }
+    if past.any():
+        directions = np.array([tunnel_frame(geom, k).d for k in range(len(geom.perforations))])
+        u = across[past]
+        nearest = directions[np.argmax(u @ directions.T, axis=1)]
+        turn = _from_sh(nearest) - _from_sh(u)
+        out["turn_deg"] = float(np.average(turn, weights=np.asarray(areas)[past]))
+    return out
 
 
 def stress_along_tunnels(
@@ -200,6 +247,7 @@ __all__ = [
     "stress_along_tunnels",
     "tunnel_length",
     "tunnel_place",
+    "turn_past_tips",
     "wall_distances",
     "wellbore_place",
 ]
