@@ -137,6 +137,13 @@ def test_a_static_study_tables_the_opening_and_converges_in_alpha(shared_tmp_pat
     assert (out / "study.png").stat().st_size > 0
 
 
+def test_a_case_scene_is_named_for_its_case_not_the_base_scene():
+    """The lab sweep's base is the 30 deg scene: its 60 deg pictures must not say 30deg."""
+    study = load_study("studies/lab_azimuth.toml")
+    assert study.case_scene(2).name == "lab_azimuth_case_2_60_deg"
+    assert study.case_scene(0).name == "lab_azimuth_case_0_30_deg"
+
+
 @pytest.mark.parametrize(
     "path",
     sorted(Path(__file__).resolve().parents[1].joinpath("studies").glob("*.toml")),

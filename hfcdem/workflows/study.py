@@ -90,6 +90,8 @@ class Study:
         _set(doc, self.parameter, self.values[k])
         for key, values in self.together.items():
             _set(doc, key, values[k])
+        # named for the case, not the base scene: pictures and summaries say which case they show
+        doc["name"] = f"{self.name}_{case_directory(k, self.values[k])}"
         return doc
 
     def case_scene(self, k: int) -> Scene:
