@@ -4,11 +4,13 @@ import csv
 import json
 import math
 
+import numpy as np
 import pytest
 from mpi4py import MPI
 
 from hfcdem import references
 from hfcdem.cli import main
+from hfcdem.config.scene import load_scene
 from hfcdem.reproduce.cases import CASES, select_cases
 from hfcdem.reproduce.compare import (
     DEGREE_FIGURE,
@@ -186,6 +188,32 @@ def test_a_peak_cut_short_by_the_validity_limit_is_not_judged(tmp_path):
     assert row.met is None and row.target == ""
     (row,) = peak_against("p", 36.0, "s", 0.1)(CaseResult(tmp_path, (), summary=ended))
     assert row.met is True
+
+
+def _facets_at(path, centres):
+    """A fracture.vtu of small triangles centred at ``centres`` (the lab's broken interfaces)."""
+    import meshio
+
+    corners = np.concatenate([c + 1e-4 * np.array([[1, 0, 0], [0, 1, 0], [-1, -1, 0]])
+                              for c in np.asarray(centres)])  # fmt: skip
+    cells = np.arange(len(corners)).reshape(-1, 3)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    meshio.write(path, meshio.Mesh(corners, [("triangle", cells)]))
+
+
+@pytest.mark.serial
+@pytest.mark.parametrize("reach, met", [(0.010, False), (0.035, True)])
+def test_the_lab_fracture_must_grow_a_tunnel_length_past_the_tips_and_turn(tmp_path, reach, met):
+    """Fig. 8 at 60 deg: tunnels from r = 10 to 40 mm; the broken faces beyond at 50 deg."""
+    scene = load_scene("meshes/scenes/lab_specimen_60deg.toml", "coarse")
+    angle = np.radians(50.0)
+    centres = [[r * np.cos(angle), r * np.sin(angle), 1e-3] for r in (0.042, 0.040 + reach)]
+    _facets_at(tmp_path / "case_0_60_deg" / "fracture.vtu", centres)
+    row = {"x": math.radians(60), "value": "60 deg", "peak_pressure_MPa": 9.9}
+    turn = lab_specimen(CaseResult(tmp_path, (scene,), rows=(row,)))[1]
+    assert turn.ours == pytest.approx(10.0, abs=0.05)  # 60 deg tunnels, faces at 50 deg
+    assert turn.met is met
+    assert f"up to {1e3 * reach:.1f} mm (the tunnels are 30 mm long)" in turn.ours_text
 
 
 @pytest.mark.serial

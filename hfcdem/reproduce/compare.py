@@ -418,22 +418,24 @@ def _lab_turn(scene: Scene, directory: Path) -> list[Comparison]:
     turn = turn_past_tips(scene, centroids, areas)
     if turn is None:
         return []
-    cell = turn["cell_angle_deg"]
+    cell, length = turn["cell_angle_deg"], tunnel_length(scene) or 0.0
     if turn["turn_deg"] is None:
         ours, agrees = "no broken interface past the tunnels' tips", False
     else:
+        reach = turn["farthest_past_tip_m"]
         ours = (
-            f"{turn['past_tip']} broken interfaces past the tips, up to "
-            f"{1e3 * turn['farthest_past_tip_m']:.1f} mm; {turn['turn_deg']:+.1f} deg toward "
+            f"{turn['past_tip']} broken interfaces past the tips, up to {1e3 * reach:.1f} mm "
+            f"(the tunnels are {1e3 * length:.0f} mm long); {turn['turn_deg']:+.1f} deg toward "
             f"SH (area-weighted; one cell at the tips: {cell:.1f} deg)"
         )
-        agrees = turn["turn_deg"] > cell
+        agrees = reach >= length and turn["turn_deg"] > cell
     return [
         Comparison(f"fracture past the tunnels turns toward SH at "
                    f"{references.LAB_TURN_AZIMUTH} deg", turn["turn_deg"], unit="deg",
                    ours_text=ours, reference_text="grows along the perforation, then turns "
                    "toward SH (Fig. 8)", agrees=agrees, source="the paper's Fig. 8, sec. 3.2",
-                   note="turned: by more than the angle one cell subtends at the tips")
+                   note="met when the fracture grows a tunnel's length past the tips and turns "
+                   "by more than the angle one cell subtends there")
     ]  # fmt: skip
 
 
