@@ -203,8 +203,8 @@ def test_a_cascade_of_breaks_is_not_a_state_loop_that_does_not_settle(plate):
     """The breakdown step breaks 20 facets, one per pass: the budget counts passes per break.
 
     With 4 passes allowed between two breaks the run is the default run to its
-    round-off (on 2 ranks two identical runs differ by 2e-14, the order of the
-    parallel sums); counted over the whole step (the old rule) it stopped at
+    round-off (on 2 ranks two identical runs once differed by 2e-14, cause not
+    traced); counted over the whole step (the old rule) it stopped at
     the breakdown with 1 of the 20 facets broken.
     """
     pumping = CavityPumping(Q, 40.0, steps=100)
