@@ -272,15 +272,16 @@ def test_all_tensile_allows_an_insignificant_shear_share(tmp_path):
         {"x": 1e-6, "tensile_failures": 100, "shear_failures": 0},
         {"x": 5e-6, "tensile_failures": 0, "shear_failures": 0},  # nothing broke
     )
-    (row,) = all_tensile("s", "all tensile", 1e6, "um")(CaseResult(tmp_path, (), rows=rows))
+    judge = all_tensile("s", "all tensile", 1e6, "um")
+    (row,) = judge(CaseResult(tmp_path, (), rows=rows))
     assert row.met and row.ours == pytest.approx(0.04)
     assert row.ours_text == (
         "largest shear share 4% (1 -> 20 um; 0 of 100, 4 of 100); 1 case(s) did not break"
     )
     over = ({"x": 1e-6, "tensile_failures": 94, "shear_failures": 6}, *rows[:1])
-    (row,) = all_tensile("s", "all tensile", 1e6, "um")(CaseResult(tmp_path, (), rows=over))
+    (row,) = judge(CaseResult(tmp_path, (), rows=over))
     assert row.met is False and row.ours == pytest.approx(0.06)
-    (row,) = all_tensile("s", "all tensile", 1e6, "um")(CaseResult(tmp_path, (), rows=rows[2:]))
+    (row,) = judge(CaseResult(tmp_path, (), rows=rows[2:]))
     assert row.met is False and row.note == "no case broke"
 
 

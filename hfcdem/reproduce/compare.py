@@ -236,12 +236,16 @@ def _shear_share(row: Mapping[str, Any]) -> tuple[int, int] | None:
     return int(s), int(t) + int(s)
 
 
-def _shear_shares(
-    r: CaseResult,
-) -> tuple[dict[float, tuple[int, int] | None], list[tuple[float, float]]]:
-    """Each case's (shear, all) failure counts by swept value; the shares of those that broke."""
-    counts = {_x(row): _shear_share(row) for row in r.rows}
-    return counts, sorted((x, c[0] / c[1]) for x, c in counts.items() if c)
+def _shear_shares(r: CaseResult) -> tuple[list[tuple[float, float]], str, int]:
+    """Return the broken cases' shear shares by swept value, their counts, the unbroken."""
+    broke = sorted((_x(row), c) for row in r.rows if (c := _shear_share(row)))
+    each = ", ".join(f"{s} of {n}" for _, (s, n) in broke)
+    return [(x, s / n) for x, (s, n) in broke], each, len(r.rows) - len(broke)
+
+
+def _span(pts: Sequence[tuple[float, float]], unit_scale: float, unit: str) -> str:
+    """Return the swept values' range in words: "0.5 -> 8 cm3/s per m"."""
+    return f"{pts[0][0] * unit_scale:g} -> {pts[-1][0] * unit_scale:g} {unit}".rstrip()
 
 
 #: how far the pumped borehole's shear share moves between meshes at point strength
@@ -264,15 +268,12 @@ def all_tensile(
     """Judge a paper's "all tensile at every value": every case at most INSIGNIFICANT_SHEAR."""
 
     def compare(r: CaseResult) -> list[Comparison]:
-        counts, pts = _shear_shares(r)
+        pts, each, unbroken = _shear_shares(r)
         if not pts:
             return [Comparison(quantity, None, reference_text=paper_text, agrees=False,
                                note="no case broke")]  # fmt: skip
         worst = max(p for _, p in pts)
-        span = f"{pts[0][0] * unit_scale:g} -> {pts[-1][0] * unit_scale:g} {unit}".rstrip()
-        each = ", ".join(f"{c[0]} of {c[1]}" for x, _ in pts if (c := counts[x]))
-        unbroken = len(counts) - len(pts)
-        ours = f"largest shear share {worst:.0%} ({span}; {each})" + (
+        ours = f"largest shear share {worst:.0%} ({_span(pts, unit_scale, unit)}; {each})" + (
             f"; {unbroken} case(s) did not break" if unbroken else ""
         )
         return [
@@ -302,18 +303,16 @@ def trend(
 
     def compare(r: CaseResult) -> list[Comparison]:
         if shear_share:
-            counts, pts = _shear_shares(r)
+            pts, each, _ = _shear_shares(r)
         else:
-            pts = sorted((x, p) for x, p in ((_x(row), _pressure(row)) for row in r.rows)
-                         if p is not None)  # fmt: skip
+            pts = sorted((_x(row), p) for row in r.rows if (p := _pressure(row)) is not None)
         if len(pts) < 2:
             return [Comparison(quantity, None, reference_text=paper_text, agrees=False,
                                note="fewer than two cases broke")]  # fmt: skip
-        (x0, p0), (x1, p1) = pts[0], pts[-1]
+        p0, p1 = pts[0][1], pts[-1][1]
         rises = p1 > p0
-        span = f"{x0 * unit_scale:g} -> {x1 * unit_scale:g} {unit}".rstrip()
+        span = _span(pts, unit_scale, unit)
         if shear_share:
-            each = ", ".join(f"{c[0]} of {c[1]}" for x, _ in pts if (c := counts[x]))
             ours = f"{'rises' if rises else 'falls'} {p0:.0%} -> {p1:.0%} ({span}; {each})"
             change = p1 - p0
         else:
