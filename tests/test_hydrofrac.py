@@ -332,7 +332,9 @@ def test_a_cavity_emptied_by_loose_wall_blocks_stops_the_run(monkeypatch):
     assert hf.history == kept and hf.t == kept[-1].time
 
 
-def _plate_cut_off_the_wall() -> HydraulicFracture:
+def _plate_cut_off_the_wall(
+    fidelity: str = "uniform", debris: str = "released"
+) -> HydraulicFracture:
     """The tiny plate's crack at x = 1 cuts its half at the wall 'left' loose.
 
     The cavity starts at 2 MPa against 1 MPa of in-situ stress across the crack,
@@ -342,8 +344,8 @@ def _plate_cut_off_the_wall() -> HydraulicFracture:
     break_crack(solid)
     settings = FlowSettings(
         cavity=("left",),
-        fidelity="uniform",
-        debris="released",
+        fidelity=fidelity,
+        debris=debris,
         cavity_volume=1e-2,
         initial_pressure=2e6,
         dt_initial=0.5,
@@ -381,6 +383,34 @@ def test_a_block_cut_loose_from_the_wall_is_debris_in_the_cavity_fluid(monkeypat
     loose = _plate_cut_off_the_wall()
     with pytest.raises(ValidityLimit, match="slides or lifts out"):  # 1e4 sizes measured
         loose.step()
+
+
+def test_viscous_flow_around_a_loose_block_stops_at_the_validity_limit_with_the_cause():
+    """No static equilibrium, so no flow balance: say so, not 'the flow did not converge'.
+
+    Seen on the viscous borehole (mu = 0.1 Pa s): three wall cells cut loose, the
+    flow Newton failed down to dt_min at condition numbers of 1e21.
+    """
+    hf = _plate_cut_off_the_wall("viscous", debris="stay")
+    with pytest.raises(ValidityLimit, match=r"cut 8 cell\(s\) loose.*debris = \"released\""):
+        hf.step()
+    assert hf.history == [] and hf.t == 0.0
+    # released, the same half is debris in the cavity's fluid and the flow balances
+    released = _plate_cut_off_the_wall("viscous")
+    for _ in range(2):
+        record = released.step()
+    assert record.time == pytest.approx(1.0) and record.mass_error < 1e-15  # 4e-17
+
+
+def test_a_flow_failure_without_loose_blocks_is_a_solver_stop(monkeypatch):
+    """The validity limit is for loose blocks only; other failures keep their advice."""
+    monkeypatch.setattr(
+        HydraulicFracture, "_newton", lambda self, dt, *args: (np.zeros(self.m), 40, False)
+    )
+    hf = _borehole(12e6, fidelity="viscous", viscosity=1e-3, residual_aperture=1e-6)
+    with pytest.raises(SimulationStopped, match="flow equations did not converge") as stop:
+        hf.step()
+    assert not isinstance(stop.value, ValidityLimit)
 
 
 def _plate_against_a_casing() -> HydraulicFracture:
