@@ -13,6 +13,8 @@ from hfcdem.config.units import FieldError, UnitError, format_quantity, join_pat
         ("33.44 mm", "length", 0.03344),
         ("2 m", "length", 2.0),
         ("7 cm", "length", 0.07),
+        ("50 nm", "length", 5e-8),
+        ("5 µm", "length", 5e-6),
         ("-150 mm", "length", -0.15),
         ("1.5e-3 m", "length", 1.5e-3),
         ("60 deg", "angle", math.pi / 3),

@@ -14,7 +14,16 @@ from typing import Any
 
 # unit -> factor to SI, per dimension; spellings are case-sensitive (mm vs Mm)
 UNITS: dict[str, dict[str, float]] = {
-    "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "km": 1e3, "in": 0.0254, "ft": 0.3048},
+    "length": {
+        "m": 1.0,
+        "cm": 1e-2,
+        "mm": 1e-3,
+        "um": 1e-6,
+        "nm": 1e-9,  # tight joints' apertures
+        "km": 1e3,
+        "in": 0.0254,
+        "ft": 0.3048,
+    },
     "angle": {"deg": math.pi / 180.0, "rad": 1.0},
     "stress": {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9, "psi": 6894.757293168},
     "time": {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0},
