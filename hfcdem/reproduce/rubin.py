@@ -38,6 +38,12 @@ from hfcdem.reproduce.compare import CaseResult, Comparison
 GAUGES = {"A": (-1, -0.015), "B": (1, 0.015), "C": (1, 0.028), "D": (1, 0.041)}
 PAPER_BREAKDOWN_MPA = 6.0  # sec. 4.3: breakdown = T0 (Table 2) without background stress
 PAPER_D_REACHED_S = 20.0  # sec. 4.3: "did not increase until t = 20 s"
+#: benchmarks/rubin_convergence.py (benchmarks/README.md): the peak is the strength
+#: check at the slot's ends, which has no converged value as the mesh resolves them
+PEAK_NOT_CONVERGED = (
+    "the peak is not converged: 8.15 / 7.57 / 6.81 / 6.25 MPa at h = 12 / 6.5 / 4.5 / "
+    "3.25 mm (dt 0.125 s); 6.87 -> 7.68 MPa as dt goes 1 -> 0.0625 s (6.5 mm)"
+)
 SOURCE = "seed hfdda sec. 4.3"
 
 
@@ -236,6 +242,7 @@ def rubin(r: CaseResult) -> list[Comparison]:
             0.10,
             note=f"at {float(s.history_time[np.nanargmax(s.history_pressure)]):.3g} s; "
             "T0 was chosen from the measured breakdown",
+            withheld=PEAK_NOT_CONVERGED,
         ),
         Comparison(
             "symmetry: largest |A - B| / gauge peak",
@@ -263,6 +270,7 @@ def rubin(r: CaseResult) -> list[Comparison]:
             f"{SOURCE}: the HFDDA's D rises at about 20 s, when the fracture reaches it",
             0.25,
             note=(f"the fracture broke past D at {broke_d:.3g} s; " if broke_d else "")
+            + "33-36 s on every mesh and time step of benchmarks/rubin_convergence.py; "
             + "output about every "
             + f"{float(np.median(np.diff(s.time))) if len(s.time) > 1 else math.nan:.3g} s",
         ),
