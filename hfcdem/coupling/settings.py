@@ -31,7 +31,8 @@ class FlowSettings:
     ``debris``: ``"released"``: blocks cut loose at the cavity walls join the
     cavity's fluid (:func:`~hfcdem.coupling.events.release_debris`);
     ``"stay"``: they are held by contact and friction alone, and a run ends at
-    the validity limit when one slides out.  Not the default: with a thin
+    the validity limit when one slides out (or, in viscous flow, when the fluid
+    balance around one has no solution once its faces open).  Not the default: with a thin
     calibrated cavity (a wall film) the debris' expansion on release swings the
     pressure (the lab specimen: 5 to 9 MPa and back between steps).
     ``supports``: exterior facet groups that support the rock without being
