@@ -106,6 +106,14 @@ def test_cavity_options():
         ({"solver__band_rings": 1.5}, "solver.band_rings"),
         ({"solver__contact_hysteresis": "yes"}, "solver.contact_hysteresis"),
         ({"solver__contact_hysteresis": 1}, "solver.contact_hysteresis"),
+        ({"solver__max_pressure_change": 0.0}, "solver.max_pressure_change"),
+        ({"solver__max_pressure_change": 2.0}, "solver.max_pressure_change"),
+        ({"solver__max_pressure_change": "2 %"}, "solver.max_pressure_change"),
+        ({"solver__max_pressure_change": float("nan")}, "solver.max_pressure_change"),
+        (
+            {"solver__max_pressure_change": 0.02, "injection__wall_joints": "seepage"},
+            "solver.max_pressure_change",
+        ),
     ],
 )
 def test_bad_input_names_the_key(changes, key):
@@ -124,6 +132,12 @@ def test_output_section():
         scene(output__pictures="yes")
     with pytest.raises(SceneError, match=r"output\.colour"):
         scene(output__colour="red")
+
+
+def test_max_pressure_change_is_a_fraction_or_none():
+    assert scene().physics.solver.max_pressure_change == math.inf
+    assert scene(solver__max_pressure_change=0.02).physics.solver.max_pressure_change == 0.02
+    assert scene(solver__max_pressure_change=math.inf).physics.solver.max_pressure_change > 1
 
 
 def test_contact_hysteresis_is_read_as_a_flag():
@@ -147,6 +161,7 @@ def test_every_default_has_one_home():
     assert solver.time_step == flow.dt_initial
     assert solver.max_time_step == flow.dt_max
     assert solver.break_tolerance == flow.break_tolerance
+    assert solver.max_pressure_change == flow.max_pressure_change
     assert solver.max_breaks_per_iteration == flow.max_breaks_per_iteration
     assert solver.break_rule == model.break_rule
     assert solver.debris == flow.debris

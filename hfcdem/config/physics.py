@@ -65,6 +65,8 @@ them so a run's record can print what was assumed.  Any invalid field raises
     max_breaks_per_iteration = 1
     strength_points = "vertices" # or "midpoint": where a spring's strength is checked
     break_tolerance = 0.01      # a step may overshoot the next break by this fraction
+    max_pressure_change = inf   # a step may move the cavity pressure by at most this
+                                # fraction of it (at least of 1 MPa), else it is halved
     linear_solver = "auto"      # "direct" (MUMPS LDL^T), "iterative" (CG + GAMG) or "auto":
                                 # direct up to 600k unknowns
     solid = "full"              # "full": DG springs on every interface of the zone (the
@@ -119,7 +121,8 @@ class SolverSettings:
     """Numerical choices of a run (SI units).
 
     The defaults are the library's: those of :class:`FlowSettings`
-    (``fidelity``, ``filling``, ``dt_initial``, ``dt_max``, ``break_tolerance``),
+    (``fidelity``, ``filling``, ``dt_initial``, ``dt_max``, ``break_tolerance``,
+    ``max_pressure_change``),
     :class:`InterfaceModel` (``break_rule``) and :class:`CDEMSolid`; a test holds
     them equal.  The scene reader takes its defaults from these fields.
     """
@@ -133,6 +136,7 @@ class SolverSettings:
     max_breaks_per_iteration: int | None = None
     strength_points: str = "vertices"
     break_tolerance: float = 0.01
+    max_pressure_change: float = math.inf
     linear_solver: str = "auto"
     solid: str = "full"
     band_threshold: float = 0.3
@@ -506,6 +510,9 @@ def _read_solver(r: _Reader) -> SolverSettings:
             choices=("vertices", "midpoint"),
         ),
         break_tolerance=r.get(so, "break_tolerance", "number", (SolverSettings, "break_tolerance")),
+        max_pressure_change=r.get(
+            so, "max_pressure_change", "number", (SolverSettings, "max_pressure_change")
+        ),
         debris=r.get(
             so, "debris", "string", (SolverSettings, "debris"), choices=("stay", "released")
         ),
@@ -527,6 +534,12 @@ def _read_solver(r: _Reader) -> SolverSettings:
         0.0 < solver.break_tolerance <= 1.0,
         "solver.break_tolerance",
         f"expected a fraction in (0, 1], got {solver.break_tolerance!r}",
+    )
+    _check(
+        0.0 < solver.max_pressure_change <= 1.0 or solver.max_pressure_change == math.inf,
+        "solver.max_pressure_change",
+        "expected a fraction of the cavity pressure in (0, 1] (or inf: no bound), got "
+        f"{solver.max_pressure_change!r}",
     )
     _check(solver.degree in (1, 2), "solver.degree", f"expected 1 or 2, got {solver.degree!r}")
     _check(
@@ -558,6 +571,12 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
         pump = _read_pump(r)
         output = _read_output(r)
         solver = _read_solver(r)
+        _check(
+            pump.get("wall_joints") != "seepage" or solver.max_pressure_change == math.inf,
+            "solver.max_pressure_change",
+            'not taken by a seepage run (injection.wall_joints = "seepage"), whose steps '
+            "follow solver.time_step and solver.max_time_step; leave it out",
+        )
         return Physics(
             rock=rock,
             interfaces=InterfaceModel(**model, break_rule=solver.break_rule),

@@ -188,6 +188,7 @@ def build_fracture(scene: Scene, solid: CDEMSolid) -> HydraulicFracture:
         permeate_joints=phys.wall_joints == "permeated",
         rigid_cavity=phys.rigid_cavity,
         break_tolerance=phys.solver.break_tolerance,
+        max_pressure_change=phys.solver.max_pressure_change,
         contact_hysteresis=phys.solver.contact_hysteresis,
     )
     return HydraulicFracture(solid, phys.fluid, phys.injection, settings)
