@@ -107,6 +107,7 @@ def test_cavity_options():
         ({"solver__contact_hysteresis": "yes"}, "solver.contact_hysteresis"),
         ({"solver__contact_hysteresis": 1}, "solver.contact_hysteresis"),
         ({"solver__max_pressure_change": 0.0}, "solver.max_pressure_change"),
+        ({"solver__max_pressure_change": 1e-6}, "solver.max_pressure_change"),
         ({"solver__max_pressure_change": 2.0}, "solver.max_pressure_change"),
         ({"solver__max_pressure_change": "2 %"}, "solver.max_pressure_change"),
         ({"solver__max_pressure_change": float("nan")}, "solver.max_pressure_change"),
