@@ -301,6 +301,29 @@ def test_a_rigid_cavity_pressurises_at_kw_q_over_v():
     assert 0.80 < ratio < 0.97
 
 
+def test_a_bounded_pressure_change_holds_on_every_step_after_the_first():
+    """FlowSettings.max_pressure_change: |dp| <= bound * max(p, 1 MPa) on each step.
+
+    The rigid cavity pressurises on the line Kw Q t / V, which the bound must not
+    bend; the first step has no pressure to scale by and is not bounded.
+    """
+    bound = 0.05
+    runs = {}
+    for name, flow in (("bounded", {"max_pressure_change": bound}), ("free", {})):
+        hf = _borehole(12e6, rigid=True, bulk_modulus=1e9, flow=flow)
+        for _ in range(8):
+            hf.step()
+        assert all(r.tensile + r.shear == 0 for r in hf.history)
+        p = np.array([r.injection_pressure for r in hf.history])
+        t = np.array([r.time for r in hf.history])
+        # on the line to the flow Newton's tolerance (1e-10 of the volume, 1.4e-7 of p)
+        np.testing.assert_allclose(p, 1e9 * 2e-6 * t / hf.cavity_volume, rtol=5e-7)
+        runs[name] = np.diff(p) / (bound * np.maximum(p[:-1], 1e6))
+    assert runs["bounded"].max() <= 1.0 + 1e-9
+    assert runs["bounded"].max() > 0.5  # steps cut to the bound, not far below (0.996)
+    assert runs["free"].max() > 10.0  # without it steps of 1 s move p by 14 bounds
+
+
 def test_borehole_higher_rate_or_viscosity_does_not_lower_the_peak():
     """Viscous flow into the new cracks (seed 001 and 003 trends)."""
     _, base = _borehole_breakdown(12e6, fidelity="viscous", mu=1e-3)
