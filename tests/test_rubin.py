@@ -65,6 +65,7 @@ def test_the_bounded_pressure_change_gives_the_peak_of_short_steps(coarse, tmp_p
     peak = float(np.nanmax(read_gauges(where, scene.geometry).history_pressure))
     assert shipped == pytest.approx(peak, rel=0.003)
     assert summary["steps"] < fine["steps"] / 3  # 297 against 1,121 measured
+    assert summary["pressure_cuts"] > 0 and fine["pressure_cuts"] == 0
 
 
 def test_the_report_rows_and_figure(coarse):

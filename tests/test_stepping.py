@@ -53,6 +53,7 @@ def test_a_pressure_jump_halves_the_step():
     assert c.pressure_cut(1.0, 0.0, 0.2e6) == 0.5
     assert c.pressure_cut(1.0, 0.0, 0.05e6) is None
     assert c.pressure_cut(0.4, 10e6, 20e6) is None  # not above 4 dt_min: no cut
+    assert c.pressure_cuts == 2  # the halvings counted
 
 
 def test_the_step_lands_on_the_next_break():

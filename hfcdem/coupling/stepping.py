@@ -28,6 +28,7 @@ class StepController:
     last_ratio: float = 0.0  # worst failure ratio of eligible facets, last accepted step
     step_ratio: float = 0.0  # the same, of the attempt under way
     event_cuts: int = 0
+    pressure_cuts: int = 0  # attempts halved by max_pressure_change (a run's cost of it)
 
     def __post_init__(self) -> None:
         if not (self.dt_min > 0.0 and self.dt_max > 0.0):
@@ -56,6 +57,7 @@ class StepController:
         if not self._may_cut(dt):
             return None
         if abs(p_new - p_old) > self.max_pressure_change * max(abs(p_old), 1e6):
+            self.pressure_cuts += 1
             return 0.5 * dt
         return None
 

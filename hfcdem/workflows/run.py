@@ -370,6 +370,8 @@ def _summarise(
         "shear_failures": counts["shear"],
         "simulated_time_s": frac.t,
         "steps": len(frac.history),
+        # since the start or the resume: attempts halved by solver.max_pressure_change
+        "pressure_cuts": frac.stepper.pressure_cuts,
         "rebuilds": frac.rebuilds,
         "rebuild_seconds": frac.rebuild_seconds,
         "rebuild_causes": dict(frac.rebuild_causes),  # contact, break, band, fill, ...
