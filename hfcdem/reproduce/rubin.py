@@ -271,7 +271,7 @@ def rubin(r: CaseResult) -> list[Comparison]:
             f"{SOURCE}: the HFDDA's D rises at about 20 s, when the fracture reaches it",
             0.25,
             note=(f"the fracture broke past D at {broke_d:.3g} s; " if broke_d else "")
-            + "33-36 s on every mesh and time step of benchmarks/rubin_convergence.py; "
+            + "34-37 s on every mesh and time step of benchmarks/rubin_convergence.py; "
             + "output about every "
             + f"{float(np.median(np.diff(s.time))) if len(s.time) > 1 else math.nan:.3g} s",
         ),
