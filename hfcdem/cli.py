@@ -170,7 +170,12 @@ def _run(args: argparse.Namespace) -> int:
             f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
         )
         return _exit_code(summary)
-    none = f"none ({summary['breakdown_note']})" if summary.get("breakdown_note") else "none"
+    note = summary.get("breakdown_note")
+    peak = summary.get("peak_pressure_MPa")
+    # with no breakdown the highest pressure is still an answer a user asks for
+    if note and peak is not None:
+        note = f"{note}; highest pressure {peak:.2f} MPa"
+    none = f"none ({note})" if note else "none"
     front = summary.get("fluid_front_m")
     say(
         f"{scene.name}: breakdown "

@@ -50,6 +50,20 @@ def test_breakdown_note_says_why_there_is_none():
     assert breakdown_note(np.where(t < 6, 10 * t, 60 - 20 * (t - 6)), found, False) is None
 
 
+def test_a_run_cut_short_by_the_validity_limit_says_its_peak_is_a_lower_bound():
+    # the lab at 45 deg, viscous flow (coarse): a cascade cuts blocks loose at 1.03 s while
+    # the pressure still swings, so no drop confirms a peak
+    p = [0.0, 2.1, 4.3, 6.39, 8.14, 7.86]
+    note = breakdown_note(p, detect_breakdown(range(len(p)), p), False, validity_limit=True)
+    assert note is not None and "validity limit" in note and "lower bound" in note
+    # the same history when the run reached its end: only the drop is too short
+    assert breakdown_note(p, None, False) == "no sustained drop after the peak"
+    # a confirmed breakdown has no note, however the run ended
+    q = [0.0, 2.0, 6.0, 3.0, 2.5, 2.0, 1.5]
+    found = detect_breakdown(range(len(q)), q)
+    assert found is not None and breakdown_note(q, found, False, validity_limit=True) is None
+
+
 def test_a_lower_peak_the_pressure_regains_is_not_the_breakdown():
     # the Rubin case at its default mesh (history.csv, MPa): the slot-end facets break at
     # 1.58 MPa, the pressure dips for three records, then rises to the breakdown at 6.23

@@ -67,13 +67,25 @@ def detect_breakdown(
 
 
 def breakdown_note(
-    pressures: Sequence[float], found: Breakdown | None, open_crack: bool
+    pressures: Sequence[float],
+    found: Breakdown | None,
+    open_crack: bool,
+    validity_limit: bool = False,
 ) -> str | None:
     """Say why a history has no breakdown (None when it has one, or nothing to say).
 
     ``open_crack``: the run started from a pre-existing open crack.
+    ``validity_limit``: the run ended at the model's validity limit, so its
+    highest pressure is a lower bound of the breakdown, not a peak.
     """
-    if found is not None or len(pressures) < 3:
+    if found is not None:
+        return None
+    if validity_limit:
+        return (
+            "the run ended at the model's validity limit before a drop confirmed a peak: "
+            "its highest pressure is a lower bound"
+        )
+    if len(pressures) < 3:
         return None
     p = np.asarray(pressures, dtype=float)
     if int(np.argmax(p)) == 1 and p[-1] < p[1]:

@@ -359,7 +359,9 @@ def _summarise(
         "scene": scene.name,
         "breakdown_pressure_MPa": found.pressure / 1e6 if found else None,
         "breakdown_time_s": found.time if found else None,
-        "breakdown_note": breakdown_note(pressures, found, "crack" in solid.tmesh.facet_names),
+        "breakdown_note": breakdown_note(
+            pressures, found, "crack" in solid.tmesh.facet_names, validity_limit=limit
+        ),
         "peak_pressure_MPa": max(pressures) / 1e6 if pressures else None,
         "first_crack_time_s": frac.first_break_time,
         "first_crack_pressure_MPa": _first_crack_pressure(frac),
