@@ -172,14 +172,18 @@ def _run(args: argparse.Namespace) -> int:
         return _exit_code(summary)
     note = summary.get("breakdown_note")
     peak = summary.get("peak_pressure_MPa")
-    # with no breakdown the highest pressure is still an answer a user asks for
+    # a note (no breakdown, or one in doubt) comes with the highest pressure: an answer too
     if note and peak is not None:
         note = f"{note}; highest pressure {peak:.2f} MPa"
     none = f"none ({note})" if note else "none"
     front = summary.get("fluid_front_m")
     say(
         f"{scene.name}: breakdown "
-        + (f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s" if bd else none)
+        + (
+            f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s" + (f" ({note})" if note else "")
+            if bd
+            else none
+        )
         + (f", fluid front {front:.2f} m" if front is not None else "")
         + f", fracture degree {summary['fracture_degree']:.4f}, "
         f"{summary['tensile_failures']} tensile / {summary['shear_failures']} shear failures, "

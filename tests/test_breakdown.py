@@ -62,6 +62,14 @@ def test_a_run_cut_short_by_the_validity_limit_says_its_peak_is_a_lower_bound():
     q = [0.0, 2.0, 6.0, 3.0, 2.5, 2.0, 1.5]
     found = detect_breakdown(range(len(q)), q)
     assert found is not None and breakdown_note(q, found, False, validity_limit=True) is None
+    # the lab at 30 deg (coarse): a drop confirms 4.61 MPa, the pressure climbs to 10.12 MPa
+    # and the validity limit ends the run before a drop can confirm that
+    r = [0.0, 2.4, 4.61, 3.2, 3.3, 3.4, 5.0, 7.5, 10.12, 9.9]
+    found = detect_breakdown(range(len(r)), r)
+    assert found is not None and found.pressure == 4.61
+    note = breakdown_note(r, found, False, validity_limit=True)
+    assert note is not None and "at least the highest pressure" in note
+    assert breakdown_note(r, found, False) is None  # at the planned end: the drop stands
 
 
 def test_a_lower_peak_the_pressure_regains_is_not_the_breakdown():

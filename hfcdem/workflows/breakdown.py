@@ -72,13 +72,21 @@ def breakdown_note(
     open_crack: bool,
     validity_limit: bool = False,
 ) -> str | None:
-    """Say why a history has no breakdown (None when it has one, or nothing to say).
+    """Say why a history has no breakdown, or why its breakdown is in doubt (else None).
 
     ``open_crack``: the run started from a pre-existing open crack.
     ``validity_limit``: the run ended at the model's validity limit, so its
     highest pressure is a lower bound of the breakdown, not a peak.
     """
     if found is not None:
+        highest = float(np.max(pressures))
+        if validity_limit and highest > found.pressure * (1.0 + 1e-9):
+            # a peak the pressure regains is no breakdown (module docstring); the stop
+            # kept the later one from being confirmed
+            return (
+                "the pressure rose past it before the model's validity limit ended the run: "
+                "the breakdown is at least the highest pressure"
+            )
         return None
     if validity_limit:
         return (
