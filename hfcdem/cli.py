@@ -170,26 +170,32 @@ def _run(args: argparse.Namespace) -> int:
             f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
         )
         return _exit_code(summary)
-    note = summary.get("breakdown_note")
-    peak = summary.get("peak_pressure_MPa")
-    # a note (no breakdown, or one in doubt) comes with the highest pressure: an answer too
-    if note and peak is not None:
-        note = f"{note}; highest pressure {peak:.2f} MPa"
-    none = f"none ({note})" if note else "none"
     front = summary.get("fluid_front_m")
     say(
-        f"{scene.name}: breakdown "
-        + (
-            f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s" + (f" ({note})" if note else "")
-            if bd
-            else none
-        )
+        f"{scene.name}: breakdown {breakdown_words(summary)}"
         + (f", fluid front {front:.2f} m" if front is not None else "")
         + f", fracture degree {summary['fracture_degree']:.4f}, "
         f"{summary['tensile_failures']} tensile / {summary['shear_failures']} shear failures, "
         f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
     )
     return _exit_code(summary)
+
+
+def breakdown_words(summary: dict[str, Any]) -> str:
+    """Say a coupled run's breakdown as its last line does: the value, or why there is none.
+
+    A note (no breakdown, or one the validity limit leaves in doubt) comes with
+    the run's highest pressure, which is then the answer a user asks for.
+    """
+    bd, note = summary.get("breakdown_pressure_MPa"), summary.get("breakdown_note")
+    peak = summary.get("peak_pressure_MPa")
+    if note and peak is not None:
+        note = f"{note}; highest pressure {peak:.2f} MPa"
+    if bd:
+        return f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s" + (
+            f" ({note})" if note else ""
+        )
+    return f"none ({note})" if note else "none"
 
 
 def _exit_code(summary: dict[str, Any]) -> int:

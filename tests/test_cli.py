@@ -2,7 +2,7 @@
 
 import pytest
 
-from hfcdem.cli import main, split_petsc_options
+from hfcdem.cli import breakdown_words, main, split_petsc_options
 
 
 def test_info_prints_the_stack(capsys):
@@ -75,3 +75,22 @@ def test_set_with_an_empty_value_removes_the_field_so_its_default_applies():
     assert load_scene(no2).physics.wall_film == pytest.approx(5e-6)
     scene = load_scene(no2, overrides={"injection.wall_film": None})
     assert scene.physics.wall_film is None
+
+
+def test_the_last_line_gives_the_breakdown_or_why_not_with_the_highest_pressure():
+    # the shipped lab at 30 deg (coarse): a drop confirmed 4.61 MPa, then the pressure rose
+    # to 10.12 MPa before the validity limit ended the run
+    doubted = {
+        "breakdown_pressure_MPa": 4.6123,
+        "breakdown_time_s": 0.75,
+        "breakdown_note": "the pressure rose past it (...)",
+        "peak_pressure_MPa": 10.1234,
+    }
+    assert breakdown_words(doubted) == (
+        "4.61 MPa at 0.75 s (the pressure rose past it (...); highest pressure 10.12 MPa)"
+    )
+    stood = {**doubted, "breakdown_note": None, "peak_pressure_MPa": 4.6123}
+    assert breakdown_words(stood) == "4.61 MPa at 0.75 s"
+    none = {**doubted, "breakdown_pressure_MPa": None, "breakdown_note": "still rises"}
+    assert breakdown_words(none) == "none (still rises; highest pressure 10.12 MPa)"
+    assert breakdown_words({**none, "breakdown_note": None}) == "none"
