@@ -554,6 +554,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 __all__ = [
+    "breakdown_words",
     "build_parser",
     "main",
     "parse_with_petsc_options",
