@@ -262,3 +262,24 @@ def test_a_dip_while_dry_joints_fill_and_nothing_breaks_is_no_breakdown(shared_t
     broken = summary["tensile_failures"] + summary["shear_failures"]
     assert broken == summary["initial_failures"]  # and nothing broke in it
     assert summary["breakdown_pressure_MPa"] is None
+
+
+def test_a_pumped_run_cut_short_says_its_peak_is_a_lower_bound():
+    from hfcdem.coupling.pumping import BREAKDOWN_DROP, PumpingResult
+    from hfcdem.workflows.seepage_ramp import pumping_note
+
+    def result(**kw):
+        base = dict(
+            first_pressure=None, first_time=None, first_mode=None, first_location=None,
+            breakdown=None, breakdown_time=None, peak_pressure=64.2e6, peak_time=95.0,
+            peak_cut_off=False, initial_failures=0, steps=10,
+        )  # fmt: skip
+        return PumpingResult(**{**base, **kw})
+
+    drop = f"{BREAKDOWN_DROP:.0%}"
+    said = pumping_note(result())
+    assert said.startswith(f"the pressure did not fall {drop} below its peak 64.2")
+    cut = pumping_note(result(validity_limit=True, stopped="a block slid out"))
+    assert cut.startswith("the run ended at the model's validity limit") and "lower bound" in cut
+    assert pumping_note(result(breakdown=64.2e6, breakdown_time=95.0)) is None
+    assert "never rose" in pumping_note(result(peak_time=0.0))

@@ -314,7 +314,7 @@ def _run_pumped(
         "peak_pressure_MPa": result.peak_pressure / 1e6,
         "peak_time_s": result.peak_time,
         "peak_cut_off": result.peak_cut_off,
-        "breakdown_note": _pumping_note(result),
+        "breakdown_note": pumping_note(result),
         "first_crack_pressure_MPa": first / 1e6 if first is not None else None,
         "first_crack_time_s": result.first_time,
         "first_crack": _first_crack(scene, location, result.first_mode, stress),
@@ -366,7 +366,7 @@ def _run_pumped(
     return summary
 
 
-def _pumping_note(result: PumpingResult) -> str | None:
+def pumping_note(result: PumpingResult) -> str | None:
     """Say why a pumped run has no breakdown (None when it has one)."""
     if result.breakdown is not None:
         return None
@@ -375,10 +375,13 @@ def _pumping_note(result: PumpingResult) -> str | None:
             "the pressure never rose above its starting value: the joints took more "
             "than the pump delivered"
         )
-    return (
-        f"the pressure did not fall {BREAKDOWN_DROP:.0%} below its peak "
-        f"{result.peak_pressure / 1e6:.4g} MPa (at {result.peak_time:.4g} s) before the end"
-    )
+    peak = f"its peak {result.peak_pressure / 1e6:.4g} MPa (at {result.peak_time:.4g} s)"
+    if result.validity_limit:  # as hfcdem.workflows.breakdown says of the other rungs
+        return (
+            f"the run ended at the model's validity limit before the pressure fell "
+            f"{BREAKDOWN_DROP:.0%} below {peak}: the peak is a lower bound"
+        )
+    return f"the pressure did not fall {BREAKDOWN_DROP:.0%} below {peak} before the end"
 
 
-__all__ = ["run_seepage_ramp", "seepage_loading"]
+__all__ = ["pumping_note", "run_seepage_ramp", "seepage_loading"]
