@@ -21,6 +21,7 @@ from hfcdem import references
 from hfcdem.analytic import kgd_viscosity
 from hfcdem.config.geometry import Scene
 from hfcdem.io.series import read_facets
+from hfcdem.workflows.breakdown import peak_is_lower_bound
 from hfcdem.workflows.places import (
     STRESS_FIGURE,
     plot_stress_along_tunnels,
@@ -355,10 +356,10 @@ def peak_cut_short(s: Mapping[str, Any]) -> str | None:
     published breakdown.  A run that reached its planned end keeps its peak
     (the paper's breakdown is the highest injection pressure).
     """
-    peak, bd = s.get("peak_pressure_MPa"), s.get("breakdown_pressure_MPa")
-    if not s.get("validity_limit") or peak is None:
-        return None
-    if bd is not None and bd >= peak * (1.0 - 1e-9):
+    peak = s.get("peak_pressure_MPa")
+    if peak is None or not peak_is_lower_bound(
+        peak, s.get("breakdown_pressure_MPa"), bool(s.get("validity_limit"))
+    ):
         return None
     return (
         "not judged: the run ended at the model's validity limit before a drop "

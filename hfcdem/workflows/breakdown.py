@@ -66,6 +66,16 @@ def detect_breakdown(
     return found
 
 
+def peak_is_lower_bound(peak: float, breakdown: float | None, validity_limit: bool) -> bool:
+    """Whether a run's highest pressure ``peak`` only bounds its breakdown from below.
+
+    So it is when the run ended at the model's validity limit and no drop
+    confirmed that peak: no breakdown was confirmed, or a lower one that the
+    pressure then rose past (any unit, the same for both).
+    """
+    return validity_limit and (breakdown is None or breakdown < peak * (1.0 - 1e-9))
+
+
 def breakdown_note(
     pressures: Sequence[float],
     found: Breakdown | None,
@@ -78,17 +88,18 @@ def breakdown_note(
     ``validity_limit``: the run ended at the model's validity limit, so its
     highest pressure is a lower bound of the breakdown, not a peak.
     """
+    highest = float(np.max(pressures)) if len(pressures) else 0.0
+    cut_short = peak_is_lower_bound(highest, found.pressure if found else None, validity_limit)
     if found is not None:
-        highest = float(np.max(pressures))
-        if validity_limit and highest > found.pressure * (1.0 + 1e-9):
-            # a peak the pressure regains is no breakdown (module docstring); the stop
-            # kept the later one from being confirmed
-            return (
-                "the pressure rose past it before the model's validity limit ended the run: "
-                "the breakdown is at least the highest pressure"
-            )
-        return None
-    if validity_limit:
+        # a peak the pressure regains is no breakdown (module docstring); the stop kept
+        # the later one from being confirmed
+        return (
+            "the pressure rose past it before the model's validity limit ended the run: "
+            "the breakdown is at least the highest pressure"
+            if cut_short
+            else None
+        )
+    if cut_short:
         return (
             "the run ended at the model's validity limit before a drop confirmed a peak: "
             "its highest pressure is a lower bound"
@@ -112,4 +123,5 @@ __all__ = [
     "Breakdown",
     "breakdown_note",
     "detect_breakdown",
+    "peak_is_lower_bound",
 ]
