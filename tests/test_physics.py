@@ -77,6 +77,7 @@ def test_cavity_options():
     ).physics
     assert (phys.wellbore, phys.wall_joints) == ("open", "wet")
     assert phys.wall_film == pytest.approx(5e-6)
+    assert scene(injection__wellbore="drilled").physics.wellbore == "drilled"
 
 
 @pytest.mark.parametrize(

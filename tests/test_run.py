@@ -376,8 +376,12 @@ def test_a_cased_wellbore_leaves_only_the_tunnel_walls_pressurised():
     assert pressurised_groups(["outer", "wellbore_wall"], "cased") == ("wellbore_wall",)
     # the casing supports the rock: it holds the blocks cut loose against it
     for wellbore, held in (("cased", ("wellbore_wall",)), ("open", ())):
-        assert supporting_walls(names, pressurised_groups(names, wellbore)) == held
+        assert supporting_walls(names, pressurised_groups(names, wellbore), wellbore) == held
     assert supporting_walls(names, ()) == ()  # no cavity, no debris
+    # a drilled wellbore: the tunnels take the pressure, the casing's springs hold the wall
+    cavity = pressurised_groups(names, "drilled")
+    assert cavity == ("perforation_1_tip", "perforation_1_wall")
+    assert supporting_walls(names, cavity, "drilled") == ()
 
 
 def test_set_replaces_a_scene_field_and_is_checked_like_the_file(shared_tmp_path, capsys):

@@ -41,7 +41,8 @@ them so a run's record can print what was assumed.  Any invalid field raises
     duration = "60 s"
     initial_pressure = "0 MPa"
     extra_volume = "0 m3"       # storage outside the model (not yet a unit: m3 as a number)
-    wellbore = "cased"          # or "open": does the pressure load the wellbore wall too?
+    wellbore = "cased"          # "cased" (wall at its in-situ traction), "drilled" (drilled at
+                                # initial_pressure, then held by its casing) or "open" (pumped)
     wall_film = "5 um"          # fluid storage = film thickness x pressurised wall area
     wall_joints = "wet"         # "dry", "wet" (the wall's), "permeated" (open cracks' too) or
                                 # "seepage" (joints fill in time; a pressure_schedule ramp)
@@ -110,6 +111,12 @@ def field_default(cls: type, name: str) -> Any:
 
 
 WALL_JOINTS = ("dry", "wet", "permeated", "seepage")
+# how the wellbore wall is loaded where the scene has tunnels: "cased", a tube set before
+# the rock was stressed (the wall keeps its in-situ traction, a lab specimen's cast tube);
+# "drilled", drilled in the stressed rock with fluid at the initial pressure and cased
+# after (the wall keeps that pressure and the stress around the hole it made; the casing
+# carries the pumping); "open", the wall takes the pumped pressure
+WELLBORES = ("cased", "drilled", "open")
 PHYSICS_SECTIONS = ("rock", "stress", "fluid", "injection", "load", "solver", "output")
 
 # in-situ stresses below this are almost surely MPa values typed with "Pa"
@@ -390,9 +397,7 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
         extra = r.get(inj, "extra_volume", "number", (Physics, "extra_volume"))
         _check(extra >= 0.0, "injection.extra_volume", f"must be >= 0 m3, got {extra!r}")
         # perforated wells are cased: only the tunnels are open hole
-        wellbore = r.get(
-            inj, "wellbore", "string", (Physics, "wellbore"), choices=("cased", "open")
-        )
+        wellbore = r.get(inj, "wellbore", "string", (Physics, "wellbore"), choices=WELLBORES)
         film = inj.quantity("wall_film", "length") if inj.has("wall_film") else None
         joints = r.get(
             inj,

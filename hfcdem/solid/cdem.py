@@ -23,6 +23,7 @@ forms (:mod:`~hfcdem.solid.forms`); it owns the solver and the break state machi
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -129,7 +130,16 @@ SOLVE_BATCH = 8
 
 
 class CDEMSolid:
-    """Blocks and springs on a :class:`TaggedMesh`, with a quasi-static solver."""
+    """Blocks and springs on a :class:`TaggedMesh`, with a quasi-static solver.
+
+    ``walls`` maps exterior facet groups to the fluid pressure (Pa) they were
+    drilled at (a wellbore drilled in the stressed rock, then cased): the rock is
+    first solved with those walls at that pressure (the drilled state, the stress
+    concentration around the hole), then the casing holds them there, as springs
+    as stiff as the interfaces' (``alpha E / h``), so later loads move them little.
+    Both parts go with the in-situ load, nothing with a unit load.  Other exterior
+    groups not loaded as a cavity keep the in-situ traction.
+    """
 
     def __init__(
         self,
@@ -143,6 +153,7 @@ class CDEMSolid:
         cracks: Sequence[str] = ("crack",),
         rollers: Mapping[str, int] | None = None,
         fixed: Sequence[str] = (),
+        walls: Mapping[str, float] | None = None,
         nitsche_penalty: float | None = None,
         solver: str = "auto",
         strength_points: str = "vertices",
@@ -207,8 +218,24 @@ class CDEMSolid:
         self.held_cells: np.ndarray = np.zeros(0, dtype=np.int64)  # global indices, sorted
         self.held_version = 0
         nitsche = nitsche_penalty if nitsche_penalty is not None else 10.0 * (degree + 1) ** 2
+        walls = dict(walls or {})
+        for name, pressure in walls.items():
+            if name not in tmesh.facet_names:
+                raise ValueError(f"wall {name!r} is not a facet group of the mesh")
+            if not math.isfinite(pressure) or abs(pressure) > 1e10:
+                raise ValueError(
+                    f"wall pressure on {name!r} must be finite, in Pa, got {pressure!r}"
+                )
+        self.walls = walls
         self.forms = SolidForms(
-            tmesh, self.V, material, interfaces, self.sigma0, nitsche, self.facet_functions
+            tmesh,
+            self.V,
+            material,
+            interfaces,
+            self.sigma0,
+            nitsche,
+            self.facet_functions,
+            walls,
         )
         # facets that ever broke, and their contact sub-state
         self.states = InterfaceStates.initial(self.is_crack, gdim)
@@ -249,6 +276,19 @@ class CDEMSolid:
         self.solve_seconds = 0.0
         self.events: list[BreakEvent] = []
         self.progress: Callable[[str], None] | None = None
+        if walls:
+            self._drill_walls()
+
+    def _drill_walls(self) -> None:
+        """Solve the drilled state, with no casing, as the reference the casing holds."""
+        self.forms.casing.value = 0.0
+        a_form, A = self.assemble_stiffness()
+        ksp = self._create_solver(A)
+        rhs = self.assemble_load(a_form, self.load_form(Loads()))
+        self.solve_assembled(ksp, [rhs], [self.forms.wall_reference])
+        ksp.destroy()
+        A.destroy()
+        self.forms.casing.value = 1.0
 
     # ------------------------------------------------------- facets and states
 

@@ -126,10 +126,16 @@ class SolidForms:
         sigma0: np.ndarray,
         nitsche_penalty: float,
         facet_functions: FacetFunctions,
+        walls: Mapping[str, float] | None = None,
     ) -> None:
         self.tmesh = tmesh
         self.mesh = mesh = tmesh.mesh
         self.V = V
+        # exterior groups drilled at a fixed pressure, then cased: the casing holds them
+        # (springs as stiff as the interfaces') at the drilled state, ``wall_reference``
+        self.walls = dict(walls or {})
+        self.wall_reference = dolfinx.fem.Function(V, name="drilled_state")
+        self.casing = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(1.0))
         self.material = material
         self.sigma0 = sigma0
         self.facet_functions = facet_functions
@@ -142,6 +148,10 @@ class SolidForms:
         self._residual = dolfinx.fem.Constant(mesh, scalar(model.residual_stiffness))
         lam2mu = material.lame_lambda + 2.0 * material.shear_modulus
         self._glue = dolfinx.fem.Constant(mesh, scalar(nitsche_penalty * lam2mu))
+
+    def casing_stiffness(self) -> ufl.core.expr.Expr:
+        """Stiffness (Pa/m) of the casing's springs on a drilled wall (0 while drilling)."""
+        return self.casing * self._kn / ufl.CellDiameter(self.mesh)
 
     def _interface_integrands(self) -> dict[int, ufl.core.expr.Expr]:
         """Return the integrand of each interface integral (SPRING, OPEN_FACETS, SLIP_FACETS)."""
@@ -185,6 +195,8 @@ class SolidForms:
             - ufl.inner(ufl.avg(stress(v, material)) * npl, ju)
             + self._glue / h * ufl.inner(ju, jv)
         ) * dS(GLUE)
+        for name in self.walls:
+            a += self.casing_stiffness() * ufl.inner(u, v) * self.tmesh.ds(name)
         return a
 
     def load(self, loads: Loads, states: InterfaceStates, dS: ufl.Measure) -> ufl.Form:
@@ -250,6 +262,13 @@ class LoadForm:
         L = ufl.inner(const((gdim,)), v) * ufl.dx
         for name, p in self._cavity.items():
             L += -ufl.inner((p * eye + sigma0) * n, v) * forms.tmesh.ds(name)
+        # a drilled wall loads with the in-situ stress, never with a unit load: its pressure,
+        # and the casing holding it at the drilled state
+        self._walls = {name: const() for name in forms.walls}
+        self._drilled = const()
+        for name, p in self._walls.items():
+            held = self._drilled * forms.casing_stiffness() * forms.wall_reference
+            L += (-ufl.inner((p * eye + sigma0) * n, v) + ufl.inner(held, v)) * forms.tmesh.ds(name)
         one = {"quadrature_degree": 1}  # per-facet values: exact at the midpoint
         jv = ufl.jump(v)
         self._crack = facet_function(zeros) if terms.facet_crack else const()
@@ -283,6 +302,9 @@ class LoadForm:
             raise ValueError(f"loads on {tuple(loads.cavity)}, the form on {self.terms.cavity}")
         assign = self._forms.facet_functions.assign
         self._sigma0.value[:] = loads.in_situ_factor * self._forms.sigma0
+        for name, p in self._forms.walls.items():
+            self._walls[name].value = loads.in_situ_factor * p
+        self._drilled.value = loads.in_situ_factor
         for name, p in loads.cavity.items():
             if not math.isfinite(p):
                 raise ValueError(f"cavity pressure on {name!r} must be finite, got {p!r}")

@@ -108,6 +108,11 @@ def build_solid(scene: Scene, tmesh: Any) -> CDEMSolid:
         zone = None
     rollers = {name: axis for name, axis in ROLLER_AXES.items() if name in names}
     fixed = tmesh.facet_groups("outer")
+    walls = {}
+    if phys.wellbore == "drilled":  # the wall keeps the pressure it was drilled at
+        cavity = pressurised_groups(names, phys.wellbore)
+        drilled = [n for n in names if n.startswith("wellbore") and n not in cavity]
+        walls = dict.fromkeys(sorted(drilled), phys.initial_pressure)
     return CDEMSolid(
         tmesh,
         phys.rock,
@@ -117,6 +122,7 @@ def build_solid(scene: Scene, tmesh: Any) -> CDEMSolid:
         degree=phys.solver.degree,
         rollers=rollers,
         fixed=fixed,
+        walls=walls,
         strength_points=phys.solver.strength_points,
         solver=phys.solver.linear_solver,
         mode=phys.solver.solid,
@@ -127,23 +133,26 @@ def build_solid(scene: Scene, tmesh: Any) -> CDEMSolid:
 def pressurised_groups(names: Any, wellbore: str) -> tuple[str, ...]:
     """Return the facet groups the injection pressure loads.
 
-    A ``"cased"`` wellbore keeps the pressure off its own wall when the scene has
-    perforation tunnels (the casing carries it); otherwise every wellbore and
-    tunnel wall is loaded.
+    A ``"cased"`` or ``"drilled"`` wellbore keeps the pressure off its own wall
+    when the scene has perforation tunnels (the casing carries it); otherwise
+    every wellbore and tunnel wall is loaded.
     """
     tunnels = tuple(sorted(n for n in names if n.startswith("perforation")))
-    if tunnels and wellbore == "cased":
+    if tunnels and wellbore in ("cased", "drilled"):
         return tunnels
     return tuple(sorted(n for n in names if n.startswith(("wellbore", "perforation"))))
 
 
-def supporting_walls(names: Any, cavity: tuple[str, ...]) -> tuple[str, ...]:
+def supporting_walls(
+    names: Any, cavity: tuple[str, ...], wellbore: str = "cased"
+) -> tuple[str, ...]:
     """Return the wellbore wall groups the pressure does not load (a cased wellbore's).
 
     They keep their in-situ traction and hold the blocks cut loose against them
-    (:func:`~hfcdem.coupling.events.release_debris`).
+    (:func:`~hfcdem.coupling.events.release_debris`).  A drilled wellbore's wall
+    has none: its casing's springs hold the rock at the drilled state.
     """
-    if not cavity:
+    if not cavity or wellbore == "drilled":
         return ()
     return tuple(sorted(n for n in names if n.startswith("wellbore") and n not in cavity))
 
@@ -171,7 +180,7 @@ def build_fracture(scene: Scene, solid: CDEMSolid) -> HydraulicFracture:
     inlet = None if cavity or point is None else tuple(point[: solid.gdim])
     settings = FlowSettings(
         cavity=cavity,
-        supports=supporting_walls(names, cavity),
+        supports=supporting_walls(names, cavity, phys.wellbore),
         debris=phys.solver.debris,
         injection_point=inlet,
         fidelity=phys.solver.fidelity,
@@ -266,7 +275,7 @@ def run_scene(
         from hfcdem.workflows.seepage_ramp import run_seepage_ramp
 
         cavity = pressurised_groups(tmesh.facet_names, phys.wellbore)
-        supports = supporting_walls(tmesh.facet_names, cavity)
+        supports = supporting_walls(tmesh.facet_names, cavity, phys.wellbore)
         return run_seepage_ramp(scene, solid, cavity, out, say, record, supports)
     return _run_coupled(scene, solid, out, say, record, resume, observers)
 

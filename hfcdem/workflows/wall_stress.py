@@ -9,8 +9,9 @@ before any injection, and with no length scale in the criterion the number of
 broken interfaces grows as the mesh refines around the hole.  The lab specimen
 (Sv 15, SH 6, Sh 1 MPa, T0 2.59 MPa) is such a scene at every azimuth.  Where
 the wall is compressed, a Mohr-Coulomb ratio says whether a plane there fails
-in shear: the unloaded (cased) wellbore walls of the deep scenes do (a
-breakout: No. 2's carries up to 3 Sv - SH = 155 MPa against c0 = 17 MPa).
+in shear: No. 2's wellbore drilled at 30 MPa does not (0.76: 3 Sv - SH - 30 =
+125 MPa of hoop stress against 30 MPa radial, c0 = 17 MPa); unloaded, it
+would (1.23, a breakout).
 """
 
 from __future__ import annotations
@@ -70,8 +71,10 @@ def _axis(letter: str) -> np.ndarray:
 def in_situ_wall_tension(scene: Scene) -> list[WallTension]:
     """Check the wellbore's and each tunnel's wall (empty for scenes of other kinds).
 
-    A cased wellbore's wall is unloaded; the tunnels (and an open wellbore) carry
-    the scene's initial pressure.
+    A drilled (or open) wellbore is checked at the scene's initial pressure, as
+    are the tunnels.  A cased one is left out: the solid keeps its wall at the
+    in-situ traction (a tube set before the rock was stressed), so the rock
+    around it carries no concentration of a hole.
     """
     geo, phys = scene.geometry, scene.physics
     if not isinstance(geo, PerforatedBlock) or phys is None:
@@ -82,7 +85,8 @@ def in_situ_wall_tension(scene: Scene) -> list[WallTension]:
         return []  # unbreakable interfaces: nothing to warn of
     stress = -phys.stress.tensor(3)  # compression positive
     p0 = phys.initial_pressure
-    holes = [("wellbore", _axis(geo.wellbore.axis), 0.0 if phys.wellbore == "cased" else p0)]
+    # a cased wall keeps its in-situ traction in the solid: no hole in the stress to check
+    holes = [] if phys.wellbore == "cased" else [("wellbore", _axis(geo.wellbore.axis), p0)]
     holes += [
         (f"perforation {k + 1}", np.asarray(perf.direction), p0)
         for k, perf in enumerate(geo.perforations)
