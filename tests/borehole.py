@@ -27,8 +27,10 @@ def borehole_plate(comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
     return mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing), comm=comm)
 
 
-def borehole_solid(tmesh: TaggedMesh, mode: str = "full") -> CDEMSolid:
-    """Return the CDEM solid of the borehole (``mode`` full or reduced)."""
+def borehole_solid(
+    tmesh: TaggedMesh, mode: str = "full", walls: dict[str, float] | None = None
+) -> CDEMSolid:
+    """Return the CDEM solid of the borehole (``mode`` full or reduced; drilled ``walls``)."""
     return CDEMSolid(
         tmesh,
         ElasticMaterial(20e9, 0.25),
@@ -39,4 +41,5 @@ def borehole_solid(tmesh: TaggedMesh, mode: str = "full") -> CDEMSolid:
         zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
         fixed=tmesh.facet_groups("outer"),
         mode=mode,
+        walls=walls,
     )

@@ -283,6 +283,9 @@ class CDEMSolid:
         """Solve the drilled state, with no casing, as the reference the casing holds."""
         self.forms.casing.value = 0.0
         a_form, A = self.assemble_stiffness()
+        if self.mode == "reduced":
+            A_dg, A = A, self.reduced_system().reduce(A)
+            A_dg.destroy()
         ksp = self._create_solver(A)
         rhs = self.assemble_load(a_form, self.load_form(Loads()))
         self.solve_assembled(ksp, [rhs], [self.forms.wall_reference])
