@@ -5,8 +5,8 @@ import dolfinx.fem.petsc
 import numpy as np
 import pytest
 import ufl
-from mpi4py import MPI
 from borehole import borehole_plate, borehole_solid
+from mpi4py import MPI
 from tiny_solid import unit_block
 
 from hfcdem import analytic
