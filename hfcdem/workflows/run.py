@@ -111,8 +111,7 @@ def build_solid(scene: Scene, tmesh: Any) -> CDEMSolid:
     walls = {}
     if phys.wellbore == "drilled":  # the wall keeps the pressure it was drilled at
         cavity = pressurised_groups(names, phys.wellbore)
-        drilled = [n for n in names if n.startswith("wellbore") and n not in cavity]
-        walls = dict.fromkeys(sorted(drilled), phys.initial_pressure)
+        walls = dict.fromkeys(unloaded_wellbore_walls(names, cavity), phys.initial_pressure)
     return CDEMSolid(
         tmesh,
         phys.rock,
@@ -154,6 +153,11 @@ def supporting_walls(
     """
     if not cavity or wellbore == "drilled":
         return ()
+    return unloaded_wellbore_walls(names, cavity)
+
+
+def unloaded_wellbore_walls(names: Any, cavity: tuple[str, ...]) -> tuple[str, ...]:
+    """Return the wellbore wall groups not in ``cavity`` (sorted)."""
     return tuple(sorted(n for n in names if n.startswith("wellbore") and n not in cavity))
 
 
