@@ -49,6 +49,7 @@ from hfcdem.io.files import write_csv, write_interfaces, write_json
 from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import InterfaceFrames
 from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.workflows.breakdown import peak_is_lower_bound
 from hfcdem.workflows.places import (
     plot_first_crack_stress,
     stress_along_tunnels,
@@ -367,16 +368,29 @@ def _run_pumped(
 
 
 def pumping_note(result: PumpingResult) -> str | None:
-    """Say why a pumped run has no breakdown (None when it has one)."""
+    """Say why a pumped run has no breakdown, or why its breakdown is in doubt (else None).
+
+    The validity limit leaves a breakdown in doubt when the pressure rose past
+    it before the run stopped: the run's highest pressure then bounds the
+    breakdown from below (:func:`hfcdem.workflows.breakdown.peak_is_lower_bound`,
+    the rule of the other rungs and of the report).
+    """
+    cut_short = peak_is_lower_bound(result.peak_pressure, result.breakdown, result.validity_limit)
     if result.breakdown is not None:
-        return None
+        if not cut_short:
+            return None
+        return (
+            f"the pressure rose past it to {result.peak_pressure / 1e6:.4g} MPa (at "
+            f"{result.peak_time:.4g} s) before the model's validity limit ended the run: "
+            "the breakdown is at least the highest pressure"
+        )
     if result.peak_time <= 0.0:
         return (
             "the pressure never rose above its starting value: the joints took more "
             "than the pump delivered"
         )
     peak = f"its peak {result.peak_pressure / 1e6:.4g} MPa (at {result.peak_time:.4g} s)"
-    if result.validity_limit:  # as hfcdem.workflows.breakdown says of the other rungs
+    if cut_short:
         return (
             f"the run ended at the model's validity limit before the pressure fell "
             f"{BREAKDOWN_DROP:.0%} below {peak}: the peak is a lower bound"
