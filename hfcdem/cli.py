@@ -336,7 +336,10 @@ def _add_run(sub: Any) -> None:
         "--force", action="store_true", help="overwrite another scene's results in DIR"
     )
     run.add_argument(
-        "--resume", action="store_true", help="continue a stopped run from its checkpoint"
+        "--resume",
+        action="store_true",
+        help="continue a stopped run from its checkpoint (not a seepage or static run: "
+        "they keep none)",
     )
     run.add_argument(
         "--set",

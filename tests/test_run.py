@@ -264,6 +264,26 @@ def test_a_resume_on_another_mesh_is_refused(shared_tmp_path):
     assert json.loads((out / "checkpoint.json").read_text())["steps"] > 0
 
 
+@pytest.mark.parametrize(
+    "path, what",
+    [
+        ("meshes/scenes/borehole_seepage.toml", "seepage"),
+        ("meshes/scenes/sneddon_plate.toml", "static"),
+    ],
+)
+def test_a_resume_of_a_run_without_checkpoints_is_refused(shared_tmp_path, path, what):
+    out = shared_tmp_path / f"no_checkpoint_{what}"
+    if MPI.COMM_WORLD.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "history.csv").write_text("time\n1.0\n")
+    MPI.COMM_WORLD.barrier()
+    with pytest.raises(SceneError, match=f"--resume: .*{what}.* keeps no checkpoint"):
+        run_scene(load_scene(path, "coarse"), out, resume=True)
+    # refused before anything was written: the stopped run's files are as they were
+    assert (out / "history.csv").read_text() == "time\n1.0\n"
+    assert not (out / "run.json").exists()
+
+
 def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
     scene, straight, out = _straight_and_stopped(shared_tmp_path)
     kept = (out / "history.csv").read_text().splitlines()

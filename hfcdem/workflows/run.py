@@ -232,6 +232,18 @@ def run_scene(
             "the scene states no physics: add [rock], [stress] and [injection] (or [load]) "
             "sections",
         )
+    if resume and (scene.physics.load is not None or scene.physics.wall_joints == "seepage"):
+        # checked before anything is written: the stopped run's files must survive
+        what = (
+            "a static [load] scene"
+            if scene.physics.load is not None
+            else 'a pumped seepage run (injection.wall_joints = "seepage")'
+        )
+        raise SceneError(
+            "",
+            f"--resume: {what} keeps no checkpoint to continue from; run it again "
+            "without --resume (into another -o, or with --force to replace its results)",
+        )
     say = say or (lambda msg: None)
     wall0 = time.perf_counter()
     out = Path(output)
