@@ -178,6 +178,34 @@ def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
         seepage_loading(load_scene(PUMPING, "coarse", overrides={"injection.wall_film": "5 um"}))
 
 
+class _Stop(Exception):
+    pass
+
+
+def test_a_pumped_run_stopped_from_outside_keeps_its_history(shared_tmp_path):
+    scene = load_scene(PUMPING, "coarse", overrides={"injection.duration": "2 s"})
+    out = shared_tmp_path / "pumped_stopped"
+    said = []
+
+    def say(message):
+        said.append(message)
+        if message.startswith("  t "):  # the first progress line of the pumping
+            raise _Stop
+
+    with pytest.raises(_Stop):
+        run_scene(scene, out, say=say)
+    rows = (out / "history.csv").read_text().splitlines()
+    costs = (out / "step_costs.csv").read_text().splitlines()
+    assert rows[0].split(",")[:2] == ["time_s", "cavity_pressure_Pa"]
+    assert costs[0].split(",") == list(COST_COLUMNS)
+    # every step done before the stop, the last one that of the progress line
+    assert 1 < len(rows) == len(costs) < 21
+    times = [float(r.split(",")[0]) for r in rows[1:]]
+    assert times == sorted(times) and f"t {times[-1]:.4g} s," in said[-1]
+    assert [float(r.split(",")[0]) for r in costs[1:]] == times
+    assert not (out / "summary.json").exists()
+
+
 def test_pumped_seepage_runs_the_same_with_contact_hysteresis_or_without(shared_tmp_path):
     """The pumped borehole's cracks open and stay open: the rule holds no facet shut."""
     assert load_scene(PUMPING, "coarse").physics.solver.contact_hysteresis

@@ -86,6 +86,9 @@ from hfcdem.solvers import ValidityLimit
 #: called with the time, the fluid pressure and the saturation per local facet
 Frames = Callable[[float, np.ndarray, np.ndarray], None]
 
+#: called after every step with its :attr:`PumpingResult.history` and ``costs`` rows
+Records = Callable[[tuple[float, ...], tuple[float, ...]], None]
+
 #: columns of :attr:`PumpingResult.costs`, one row per pumped step
 COST_COLUMNS = (
     "time_s",
@@ -208,6 +211,7 @@ def pump_with_seepage(
     supports: Sequence[str] = (),
     at_first_break: Callable[[float], None] | None = None,
     contact_hysteresis: bool = True,
+    records: Records | None = None,
 ) -> PumpingResult:
     """Pump into the ``cavity`` facet groups and follow breaks and pressure (collective).
 
@@ -226,7 +230,9 @@ def pump_with_seepage(
     (:meth:`_PumpedCavity.fields`); ``at_first_break``
     (collectively) with the time, after the step of the first break, when the
     solid holds that step's state.  ``contact_hysteresis``: see
-    :meth:`~hfcdem.solid.states.InterfaceStates.switch_contacts`.
+    :meth:`~hfcdem.solid.states.InterfaceStates.switch_contacts`.  ``records``
+    is called after every step with its history and cost rows (on every rank),
+    so that a run stopped from outside keeps what it did.
     """
     if not isinstance(aperture, JointAperture):
         aperture = JointAperture(aperture)  # checks it
@@ -246,7 +252,9 @@ def pump_with_seepage(
         solid, tuple(cavity), fluid, aperture, pumping, tuple(supports), contact_hysteresis
     )
     try:
-        return run.run(initial_failures, progress, max_state_iterations, frames, at_first_break)
+        return run.run(
+            initial_failures, progress, max_state_iterations, frames, at_first_break, records
+        )
     finally:
         run.seep.destroy()
 
@@ -726,6 +734,7 @@ class _PumpedCavity:
         max_iterations: int,
         frames: Frames | None = None,
         at_first_break: Callable[[float], None] | None = None,
+        records: Records | None = None,
     ) -> PumpingResult:
         """Pump for the whole duration; return the result."""
         solid, pumping = self.solid, self.pumping
@@ -790,6 +799,8 @@ class _PumpedCavity:
             history.append(
                 (t, self.p, self.joint_content(), crack, counts["tensile"], counts["shear"], wet)
             )
+            if records is not None:
+                records(history[-1], costs[-1])
             if top > peak:
                 peak, peak_time = top, t
             elif (

@@ -46,6 +46,7 @@ from hfcdem.coupling.pumping import (
     pump_with_seepage,
 )
 from hfcdem.io.files import write_csv, write_interfaces, write_json
+from hfcdem.io.history import HistoryFile
 from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import InterfaceFrames
 from hfcdem.solid.cdem import CDEMSolid
@@ -57,6 +58,18 @@ from hfcdem.workflows.places import (
 )
 
 _MODES = {1: "tensile", 2: "shear"}
+
+
+#: the columns of a pumped run's ``history.csv``, one row per step
+PUMPED_COLUMNS = (
+    "time_s",
+    "cavity_pressure_Pa",
+    "fluid_in_joints_m3",
+    "crack_volume_m3",
+    "tensile",
+    "shear",
+    "joints_holding_pressure",
+)
 
 
 def _held_at(phys: Physics) -> str:
@@ -277,6 +290,16 @@ def _run_pumped(
         if profile:
             stress.update(time_s=t, sigma_xx=profile)
 
+    # written step by step, so that a run stopped from outside keeps its history
+    history = HistoryFile(out / "history.csv", PUMPED_COLUMNS, comm)
+    step_costs = HistoryFile(out / "step_costs.csv", COST_COLUMNS, comm)
+    history.start()
+    step_costs.start()
+
+    def records(row: tuple[float, ...], cost: tuple[float, ...]) -> None:
+        history.append(dict(zip(PUMPED_COLUMNS, row, strict=True)))
+        step_costs.append(dict(zip(COST_COLUMNS, cost, strict=True)))
+
     result = pump_with_seepage(
         solid,
         cavity,
@@ -288,22 +311,12 @@ def _run_pumped(
         supports=supports,
         at_first_break=at_first_break,
         contact_hysteresis=phys.solver.contact_hysteresis,
+        records=records,
     )
     if result.stopped:
         say(f"stopped: {result.stopped}")
     if result.initial_failures:
         say(f"initial state: {result.initial_failures} interfaces fail before pumping")
-    names = [
-        "time_s",
-        "cavity_pressure_Pa",
-        "fluid_in_joints_m3",
-        "crack_volume_m3",
-        "tensile",
-        "shear",
-        "joints_holding_pressure",
-    ]
-    write_csv(out / "history.csv", names, [list(r) for r in result.history], comm)
-    write_csv(out / "step_costs.csv", list(COST_COLUMNS), [list(r) for r in result.costs], comm)
     _write_joints(out / "joints.vtu", solid, result.joint_pressure, result.saturation)
     first, pb = result.first_pressure, result.breakdown
     location = result.first_location
@@ -398,4 +411,4 @@ def pumping_note(result: PumpingResult) -> str | None:
     return f"the pressure did not fall {BREAKDOWN_DROP:.0%} below {peak} before the end"
 
 
-__all__ = ["pumping_note", "run_seepage_ramp", "seepage_loading"]
+__all__ = ["PUMPED_COLUMNS", "pumping_note", "run_seepage_ramp", "seepage_loading"]
