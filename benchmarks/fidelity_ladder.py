@@ -20,12 +20,17 @@ ones (from the run's ``step_costs.csv``).  The rungs:
 - ``seepage-kw``: the same with the paper's fluid stiffness Kw = 10 MPa
   (Tables 1 and 3) in the cavity and the joints instead of water's;
 - ``seepage-reduced``: ``seepage`` on the reduced solid (``solver.solid``):
-  springs on every interface of the zone, the rock outside it continuous.
+  springs on every interface of the zone, the rock outside it continuous;
+- ``seepage-step``: ``seepage`` with ``solver.break_landing = "step"``: no step
+  shortened onto a break, the interfaces overstressed at a step's end break
+  then (at most a step late).
 
     make run CMD="python3 benchmarks/fidelity_ladder.py --rungs uniform uniform-water viscous"
     make run CMD="python3 benchmarks/fidelity_ladder.py --rungs seepage"   # about 15 min coarse
     make run CMD="python3 benchmarks/fidelity_ladder.py --rungs seepage \
         --resolution default --duration '0.1 s'"
+    make run CMD="python3 benchmarks/fidelity_ladder.py --rungs seepage seepage-step \
+        --resolution default --duration '1.5 s'"
 """
 
 from __future__ import annotations
@@ -43,19 +48,30 @@ from hfcdem.config.scene import load_scene
 from hfcdem.workflows.run import run_scene
 
 ROOT = Path(__file__).resolve().parents[1]
-RUNGS = ("uniform", "uniform-water", "viscous", "seepage", "seepage-kw", "seepage-reduced")
+RUNGS = (
+    "uniform",
+    "uniform-water",
+    "viscous",
+    "seepage",
+    "seepage-kw",
+    "seepage-reduced",
+    "seepage-step",
+)
+SEEPAGE = ("seepage", "seepage-kw", "seepage-reduced", "seepage-step")
 
 
 def scene_text(rung: str) -> str:
     """No. 2's scene file for ``rung``."""
     text = (ROOT / "meshes/scenes/perforation_no2.toml").read_text()
-    if rung in ("uniform-water", "seepage", "seepage-reduced"):
+    if rung in ("uniform-water", "seepage", "seepage-reduced", "seepage-step"):
         text = re.sub(r"(?m)^wall_film = .*\n", "", text)
         text = re.sub(r'(?m)^bulk_modulus = "[^"]*"', 'bulk_modulus = "2.2 GPa"', text)
     if rung == "seepage-kw":
         text = re.sub(r"(?m)^wall_film = .*\n", "", text)
-    if rung in ("seepage", "seepage-kw", "seepage-reduced"):
+    if rung in SEEPAGE:
         text = re.sub(r'(?m)^wall_joints = "[a-z]+"', 'wall_joints = "seepage"', text)
+    if rung == "seepage-step":
+        text = text.replace("[solver]\n", '[solver]\nbreak_landing = "step"\n', 1)
     if rung == "seepage-reduced":
         text = text.replace("[solver]\n", '[solver]\nsolid = "reduced"\n', 1)
     if rung == "viscous":

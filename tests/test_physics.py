@@ -116,6 +116,8 @@ def test_cavity_options():
             {"solver__max_pressure_change": 0.02, "injection__wall_joints": "seepage"},
             "solver.max_pressure_change",
         ),
+        ({"solver__break_landing": "late"}, "solver.break_landing"),
+        ({"solver__break_landing": "step"}, "solver.break_landing"),  # not a seepage run
     ],
 )
 def test_bad_input_names_the_key(changes, key):
@@ -149,6 +151,12 @@ def test_contact_hysteresis_is_read_as_a_flag():
     seepage = scene(injection__wall_joints="seepage").physics
     assert seepage.solver.contact_hysteresis is True
     assert "solver.contact_hysteresis" in seepage.defaulted
+
+
+def test_break_landing_is_exact_unless_a_seepage_run_says_step():
+    assert scene().physics.solver.break_landing == "exact"
+    seepage = scene(injection__wall_joints="seepage", solver__break_landing="step").physics
+    assert seepage.solver.break_landing == "step"
 
 
 def test_every_default_has_one_home():

@@ -66,6 +66,9 @@ them so a run's record can print what was assumed.  Any invalid field raises
     max_breaks_per_iteration = 1
     strength_points = "vertices" # or "midpoint": where a spring's strength is checked
     break_tolerance = 0.01      # a step may overshoot the next break by this fraction
+    break_landing = "exact"     # pumped seepage: "exact" shortens a step onto its first break;
+                                # "step" breaks what is overstressed at the step's end (at
+                                # most a step late, far fewer steps)
     max_pressure_change = inf   # a step may move the cavity pressure by at most this
                                 # fraction of it (at least of 1 MPa), else it is halved;
                                 # 0.001 to 1
@@ -144,6 +147,7 @@ class SolverSettings:
     max_breaks_per_iteration: int | None = None
     strength_points: str = "vertices"
     break_tolerance: float = 0.01
+    break_landing: str = "exact"
     max_pressure_change: float = math.inf
     linear_solver: str = "auto"
     solid: str = "full"
@@ -516,6 +520,13 @@ def _read_solver(r: _Reader) -> SolverSettings:
             choices=("vertices", "midpoint"),
         ),
         break_tolerance=r.get(so, "break_tolerance", "number", (SolverSettings, "break_tolerance")),
+        break_landing=r.get(
+            so,
+            "break_landing",
+            "string",
+            (SolverSettings, "break_landing"),
+            choices=("exact", "step"),
+        ),
         max_pressure_change=r.get(
             so, "max_pressure_change", "number", (SolverSettings, "max_pressure_change")
         ),
@@ -583,6 +594,12 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             "solver.max_pressure_change",
             'not taken by a seepage run (injection.wall_joints = "seepage"), whose steps '
             "follow solver.time_step and solver.max_time_step; leave it out",
+        )
+        _check(
+            pump.get("wall_joints") == "seepage" or solver.break_landing == "exact",
+            "solver.break_landing",
+            '"step" is taken by a pumped seepage run (injection.wall_joints = "seepage") '
+            "only; the other rungs shorten a step onto a break within solver.break_tolerance",
         )
         return Physics(
             rock=rock,

@@ -102,7 +102,9 @@ class CavityPumping:
     volume.  ``steps`` equal steps; ``initial_pressure`` in the cavity at t = 0
     (the joints start dry).  ``max_dt`` (s): the pumped run of
     :mod:`hfcdem.coupling.pumping` may grow a quiet step up to it; None keeps
-    every step at :attr:`dt`.
+    every step at :attr:`dt`.  ``land_on_breaks``: a step in which an
+    interface first fails is shortened to land on it (False: the interfaces
+    overstressed at the step's end break then, at most a step late).
     """
 
     rate: float
@@ -111,6 +113,7 @@ class CavityPumping:
     initial_pressure: float = 0.0
     extra_volume: float = 0.0
     max_dt: float | None = None
+    land_on_breaks: bool = True
 
     def __post_init__(self) -> None:
         for name in ("rate", "duration", "initial_pressure", "extra_volume"):
@@ -129,6 +132,10 @@ class CavityPumping:
         if not (isinstance(self.steps, int) and 1 <= self.steps <= 10**7):
             raise ValueError(
                 f"CavityPumping.steps must be an integer in [1, 1e7], got {self.steps!r}"
+            )
+        if not isinstance(self.land_on_breaks, bool):
+            raise ValueError(
+                f"CavityPumping.land_on_breaks must be True or False, got {self.land_on_breaks!r}"
             )
         if self.max_dt is not None and not (math.isfinite(self.max_dt) and self.max_dt > 0.0):
             raise ValueError(

@@ -664,7 +664,8 @@ class _PumpedCavity:
                 self.rebalances += 1
                 continue
             stalled, last_gap = 0, math.inf
-            if broken == 0 and rounds == 0 and landings < _MAX_LANDINGS:
+            land = self.pumping.land_on_breaks and broken == 0 and rounds == 0
+            if land and landings < _MAX_LANDINGS:
                 s = self._crossing(start_loads, loads, u_start)
                 # land just past the crossing (a landed step finds it at 1 / (1 + _PAST))
                 if _MIN_FRACTION < s and s * (1.0 + _PAST) < 1.0:

@@ -108,6 +108,12 @@ def seepage_loading(scene: Scene) -> PressureRamp | CavityPumping:
             phys.initial_pressure,
             phys.extra_volume,
             max_dt=longest if math.isfinite(longest) else None,
+            land_on_breaks=phys.solver.break_landing == "exact",
+        )
+    if phys.solver.break_landing != "exact":
+        raise SceneError(
+            "solver.break_landing",
+            'a seepage pressure ramp stops at its first break: "step" is for a pumped rate',
         )
     if inj is None or len(points) != 2 or points[0][0] != 0.0:
         raise SceneError(
@@ -153,6 +159,8 @@ def run_seepage_ramp(
         )
     if isinstance(ramp, CavityPumping):
         what = f"pumping {ramp.rate:.4g} m3/s into the cavity for {ramp.duration:.4g} s"
+        if not ramp.land_on_breaks:
+            what += " (breaks at the end of each step: solver.break_landing = 'step')"
     else:
         what = f"a ramp of {ramp.rate / 1e6:.4g} MPa/s"
     say(
