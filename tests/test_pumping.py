@@ -89,6 +89,45 @@ def test_a_block_moving_out_of_the_rock_ends_the_run_at_its_validity_limit(plate
     assert len(t) >= 10 and run.peak_pressure == pytest.approx(run.history[-1][1])
 
 
+def test_no_balance_uses_a_solved_state_before_its_check_for_loose_blocks(plate, monkeypatch):
+    """Every solid solve is checked before a balance takes its volume, resolves too.
+
+    A block cut loose by a break gives the cracks joined to the cavity any
+    volume; balanced on, it read as "the cavity runs dry" (No. 2, default mesh).
+    """
+    from hfcdem.solid.cdem import CDEMSolid
+
+    unchecked = {"solve": False, "balances": 0, "resolves": 0}
+    solve, check = CDEMSolid.solve, pumping_module.check_small_displacement
+    balance, resolve = pumping_module._PumpedCavity.balance, pumping_module._PumpedCavity.resolve
+
+    def solved(self, *args, **kwargs):
+        # (from the first balance on: the excavated start is the settled reference state)
+        unchecked["solve"] = unchecked["balances"] > 0
+        return solve(self, *args, **kwargs)
+
+    def checked(solid, t):
+        unchecked["solve"] = False
+        return check(solid, t)
+
+    def balanced(self, *args, **kwargs):
+        assert not unchecked["solve"], "a balance on an unchecked solve"
+        unchecked["balances"] += 1
+        return balance(self, *args, **kwargs)
+
+    def resolved(self, *args, **kwargs):
+        unchecked["resolves"] += 1
+        return resolve(self, *args, **kwargs)
+
+    monkeypatch.setattr(CDEMSolid, "solve", solved)
+    monkeypatch.setattr(pumping_module, "check_small_displacement", checked)
+    monkeypatch.setattr(pumping_module._PumpedCavity, "balance", balanced)
+    monkeypatch.setattr(pumping_module._PumpedCavity, "resolve", resolved)
+    run = _pump(plate, 1e-9, steps=40)
+    assert run.breakdown is not None  # the sealed cavity broke: resolves came after breaks
+    assert unchecked["resolves"] > 0 and unchecked["balances"] > 40
+
+
 def test_faster_pumping_breaks_down_higher(plate):
     slow, fast = (_pump(plate, 5e-6, rate) for rate in (Q, 10 * Q))
     assert slow.breakdown is not None and fast.breakdown is not None
