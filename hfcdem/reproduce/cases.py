@@ -461,7 +461,7 @@ CASES: tuple[Case, ...] = (
         discretisation="large: the joints' void follows the mesh (1.085 / 2.071 / 3.217 m^2 "
         "of joints in the zone at the coarse / default / paper mesh, docs/seepage.md); at the "
         "default mesh (with solver.break_landing = 'step', one run to 75.7 s) the pressure "
-        "dips to 7.0 MPa instead of 17.5 and trails the coarse one by 10-16 MPa from 5 s on "
+        "dips to 7.0 MPa instead of 17.5 and trails the coarse one by 10-17 MPa from 5 s on "
         "(54.6 against 64.8 MPa at 75 s; benchmarks/README.md, 2026-12-05)",
         note="the fidelity ladder's seepage rung (benchmarks/fidelity_ladder.py)",
         figures=(SATURATION_FIGURE, "pressure.png", STRESS_FIGURE),
