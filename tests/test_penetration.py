@@ -158,5 +158,8 @@ def test_bad_input(plate):
         CavityPumping(0.0, 1.0)
     with pytest.raises(ValueError, match="duration"):
         CavityPumping(1e-6, -1.0)
+    for tolerance in (-0.01, 1.5, math.nan):
+        with pytest.raises(ValueError, match="landing_tolerance"):
+            CavityPumping(1e-6, 1.0, landing_tolerance=tolerance)
     with pytest.raises(KeyError, match="no_such_group"):
         ramp_breakdown(_solid(plate), ("no_such_group",), FLUID, APERTURE, PressureRamp(1.0, 1e6))

@@ -118,6 +118,7 @@ def test_cavity_options():
         ),
         ({"solver__break_landing": "late"}, "solver.break_landing"),
         ({"solver__break_landing": "step"}, "solver.break_landing"),  # not a seepage run
+        ({"solver__break_landing": "tolerance"}, "solver.break_landing"),
     ],
 )
 def test_bad_input_names_the_key(changes, key):
@@ -153,10 +154,11 @@ def test_contact_hysteresis_is_read_as_a_flag():
     assert "solver.contact_hysteresis" in seepage.defaulted
 
 
-def test_break_landing_is_exact_unless_a_seepage_run_says_step():
+def test_break_landing_is_exact_unless_a_seepage_run_says_otherwise():
     assert scene().physics.solver.break_landing == "exact"
-    seepage = scene(injection__wall_joints="seepage", solver__break_landing="step").physics
-    assert seepage.solver.break_landing == "step"
+    for landing in ("step", "tolerance"):
+        seepage = scene(injection__wall_joints="seepage", solver__break_landing=landing).physics
+        assert seepage.solver.break_landing == landing
 
 
 def test_every_default_has_one_home():

@@ -68,7 +68,9 @@ them so a run's record can print what was assumed.  Any invalid field raises
     break_tolerance = 0.01      # a step may overshoot the next break by this fraction
     break_landing = "exact"     # pumped seepage: "exact" shortens a step onto its first break;
                                 # "step" breaks what is overstressed at the step's end (at
-                                # most a step late, far fewer steps)
+                                # most a step late, far fewer steps); "tolerance" lands
+                                # only a step that moved the cavity pressure by more than
+                                # break_tolerance of it
     max_pressure_change = inf   # a step may move the cavity pressure by at most this
                                 # fraction of it (at least of 1 MPa), else it is halved;
                                 # 0.001 to 1
@@ -525,7 +527,7 @@ def _read_solver(r: _Reader) -> SolverSettings:
             "break_landing",
             "string",
             (SolverSettings, "break_landing"),
-            choices=("exact", "step"),
+            choices=("exact", "step", "tolerance"),
         ),
         max_pressure_change=r.get(
             so, "max_pressure_change", "number", (SolverSettings, "max_pressure_change")
@@ -598,8 +600,9 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
         _check(
             pump.get("wall_joints") == "seepage" or solver.break_landing == "exact",
             "solver.break_landing",
-            '"step" is taken by a pumped seepage run (injection.wall_joints = "seepage") '
-            "only; the other rungs shorten a step onto a break within solver.break_tolerance",
+            '"step" and "tolerance" are taken by a pumped seepage run (injection.wall_joints = '
+            '"seepage") only; the other rungs shorten a step onto a break within '
+            "solver.break_tolerance",
         )
         return Physics(
             rock=rock,

@@ -105,6 +105,9 @@ class CavityPumping:
     every step at :attr:`dt`.  ``land_on_breaks``: a step in which an
     interface first fails is shortened to land on it (False: the interfaces
     overstressed at the step's end break then, at most a step late).
+    ``landing_tolerance``: a step lands only when it moved the cavity pressure
+    by more than this fraction of it, so a break that is not landed is off by
+    about that fraction at most (0: every step lands).
     """
 
     rate: float
@@ -114,6 +117,7 @@ class CavityPumping:
     extra_volume: float = 0.0
     max_dt: float | None = None
     land_on_breaks: bool = True
+    landing_tolerance: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("rate", "duration", "initial_pressure", "extra_volume"):
@@ -136,6 +140,11 @@ class CavityPumping:
         if not isinstance(self.land_on_breaks, bool):
             raise ValueError(
                 f"CavityPumping.land_on_breaks must be True or False, got {self.land_on_breaks!r}"
+            )
+        if not 0.0 <= self.landing_tolerance <= 1.0:
+            raise ValueError(
+                "CavityPumping.landing_tolerance must be a fraction in [0, 1], got "
+                f"{self.landing_tolerance!r}"
             )
         if self.max_dt is not None and not (math.isfinite(self.max_dt) and self.max_dt > 0.0):
             raise ValueError(

@@ -669,6 +669,9 @@ class _PumpedCavity:
                 continue
             stalled, last_gap = 0, math.inf
             land = self.pumping.land_on_breaks and broken == 0 and rounds == 0
+            tol = self.pumping.landing_tolerance
+            if land and tol > 0.0:  # unlanded, a break is off by |p - start_p| at most
+                land = abs(p - start_p) > tol * max(p, start_p)
             if land and landings < _MAX_LANDINGS:
                 s = self._crossing(start_loads, loads, u_start)
                 # land just past the crossing (a landed step finds it at 1 / (1 + _PAST))

@@ -108,12 +108,16 @@ def seepage_loading(scene: Scene) -> PressureRamp | CavityPumping:
             phys.initial_pressure,
             phys.extra_volume,
             max_dt=longest if math.isfinite(longest) else None,
-            land_on_breaks=phys.solver.break_landing == "exact",
+            land_on_breaks=phys.solver.break_landing != "step",
+            landing_tolerance=(
+                phys.solver.break_tolerance if phys.solver.break_landing == "tolerance" else 0.0
+            ),
         )
     if phys.solver.break_landing != "exact":
         raise SceneError(
             "solver.break_landing",
-            'a seepage pressure ramp stops at its first break: "step" is for a pumped rate',
+            'a seepage pressure ramp stops at its first break: "step" and "tolerance" are for '
+            "a pumped rate",
         )
     if inj is None or len(points) != 2 or points[0][0] != 0.0:
         raise SceneError(
@@ -161,6 +165,11 @@ def run_seepage_ramp(
         what = f"pumping {ramp.rate:.4g} m3/s into the cavity for {ramp.duration:.4g} s"
         if not ramp.land_on_breaks:
             what += " (breaks at the end of each step: solver.break_landing = 'step')"
+        elif ramp.landing_tolerance > 0.0:
+            what += (
+                " (a step lands on its first break only when it moves the cavity pressure by "
+                f"more than {ramp.landing_tolerance:.3g} of it: solver.break_landing = 'tolerance')"
+            )
     else:
         what = f"a ramp of {ramp.rate / 1e6:.4g} MPa/s"
     say(
