@@ -102,8 +102,7 @@ def test_no_balance_uses_a_solved_state_before_its_check_for_loose_blocks(plate,
     balance, resolve = pumping_module._PumpedCavity.balance, pumping_module._PumpedCavity.resolve
 
     def solved(self, *args, **kwargs):
-        # (from the first balance on: the excavated start is the settled reference state)
-        unchecked["solve"] = unchecked["balances"] > 0
+        unchecked["solve"] = True
         return solve(self, *args, **kwargs)
 
     def checked(solid, t):
@@ -126,6 +125,21 @@ def test_no_balance_uses_a_solved_state_before_its_check_for_loose_blocks(plate,
     run = _pump(plate, 1e-9, steps=40)
     assert run.breakdown is not None  # the sealed cavity broke: resolves came after breaks
     assert unchecked["resolves"] > 0 and unchecked["balances"] > 40
+
+
+def test_a_block_loose_before_pumping_ends_the_run_at_the_validity_limit(plate, monkeypatch):
+    """The excavated state's solve is checked too; its stop is a result, not a traceback."""
+    from hfcdem.solvers import ValidityLimit
+
+    def loose(solid, t):
+        raise ValidityLimit(f"at t = {t:.6g} s a broken interface moved 1 m apart")
+
+    monkeypatch.setattr(pumping_module, "check_small_displacement", loose)
+    run = _pump(plate, 1e-9, steps=4)
+    assert run.validity_limit and run.steps == 0 and run.history == []
+    assert run.stopped.startswith("the excavated rock is past the validity limit before pumping")
+    assert "at t = 0 s" in run.stopped
+    assert run.first_pressure is None and run.breakdown is None
 
 
 def test_faster_pumping_breaks_down_higher(plate):

@@ -347,6 +347,8 @@ def test_a_pumped_run_cut_short_says_its_peak_is_a_lower_bound():
     assert cut.startswith("the run ended at the model's validity limit") and "lower bound" in cut
     assert pumping_note(result(breakdown=64.2e6, breakdown_time=95.0)) is None
     assert "never rose" in pumping_note(result(peak_time=0.0))
+    before = pumping_note(result(peak_time=0.0, steps=0, stopped="a block slid out"))
+    assert before == "the run stopped before its first step (a block slid out)"
     # a confirmed breakdown the pressure then rose past before the limit stopped the run
     surpassed = dict(breakdown=60.1e6, breakdown_time=70.0, validity_limit=True)
     past = pumping_note(result(**surpassed))

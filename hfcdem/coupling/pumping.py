@@ -248,9 +248,17 @@ def pump_with_seepage(
             None, None, None, None, None, None, p0, 0.0, True, stop.broken, 0,
             stopped=f"the excavated rock fails before pumping: {stop}",
         )  # fmt: skip
-    run = _PumpedCavity(
-        solid, tuple(cavity), fluid, aperture, pumping, tuple(supports), contact_hysteresis
-    )
+    try:
+        run = _PumpedCavity(
+            solid, tuple(cavity), fluid, aperture, pumping, tuple(supports), contact_hysteresis
+        )
+    except ValidityLimit as stop:
+        p0 = pumping.initial_pressure
+        return PumpingResult(
+            None, None, None, None, None, None, p0, 0.0, True, initial_failures, 0,
+            stopped=f"the excavated rock is past the validity limit before pumping: {stop}",
+            validity_limit=True,
+        )  # fmt: skip
     try:
         return run.run(
             initial_failures, progress, max_state_iterations, frames, at_first_break, records
@@ -315,6 +323,11 @@ class _PumpedCavity:
         self.p = pumping.initial_pressure
         loads = self.loads(self.p, self.seep.pressure)
         solid.solve(loads)
+        try:  # a block the excavation cut loose (and that is not debris) has no volume to hold
+            check_small_displacement(solid, 0.0)
+        except ValidityLimit:
+            self.seep.destroy()
+            raise
         self.wall_ref = self._wall(0)
         self.volume = self._volume(loads)  # at self.p
         self._linearise()

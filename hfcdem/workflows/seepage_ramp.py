@@ -414,6 +414,8 @@ def pumping_note(result: PumpingResult) -> str | None:
             f"{result.peak_time:.4g} s) before the model's validity limit ended the run: "
             "the breakdown is at least the highest pressure"
         )
+    if result.steps == 0 and result.stopped:
+        return f"the run stopped before its first step ({result.stopped})"
     if result.peak_time <= 0.0:
         return (
             "the pressure never rose above its starting value: the joints took more "
