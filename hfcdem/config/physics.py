@@ -66,6 +66,8 @@ them so a run's record can print what was assumed.  Any invalid field raises
     max_breaks_per_iteration = 1
     strength_points = "vertices" # or "midpoint": where a spring's strength is checked
     break_tolerance = 0.01      # a step may overshoot the next break by this fraction
+                                # (break_landing = "tolerance": the share of the cavity
+                                # pressure a pumped step may move without landing)
     break_landing = "exact"     # pumped seepage: "exact" shortens a step onto its first break;
                                 # "step" breaks what is overstressed at the step's end (at
                                 # most a step late, far fewer steps); "tolerance" lands
