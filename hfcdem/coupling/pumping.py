@@ -286,6 +286,13 @@ def cavity_joint_coupling(solid: CDEMSolid, opening: np.ndarray) -> np.ndarray:
     return np.where(loaded & solid.owned, solid.areas * opening, 0.0)
 
 
+def _pace(started: float, t: float, pumping: CavityPumping) -> str:
+    """Wall time since ``started`` and the time left were the run to go on at its pace."""
+    wall = time.perf_counter() - started
+    left = wall / t * max(pumping.duration - t, 0.0)
+    return f"wall {wall:.0f} s, about {left:.0f} s left at this pace"
+
+
 class _PumpedCavity:
     """The cavity, its cracks and the joints' seepage, stepped together."""
 
@@ -775,6 +782,7 @@ class _PumpedCavity:
         )
         rate: float | None = None  # the cavity pressure's rate over the last step (Pa/s)
         wet = self._wet_share()
+        started = time.perf_counter()
         while t < pumping.duration * (1.0 - 1e-12):
             stepper.limit(pumping.duration - t)
             tried, p_before, wet_before = stepper.dt, self.p, wet
@@ -841,7 +849,7 @@ class _PumpedCavity:
                 progress(
                     f"  t {t:.4g} s, cavity {self.p / 1e6:.4g} MPa, {counts['tensile']} tensile "
                     f"{counts['shear']} shear, joints holding pressure {wet:.1%}, "
-                    f"cracks joined to the cavity {crack:.3g} m^3"
+                    f"cracks joined to the cavity {crack:.3g} m^3, {_pace(started, t, pumping)}"
                 )
         counts = solid.broken_counts()
         pj, sat = self.fields()
