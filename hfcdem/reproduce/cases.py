@@ -70,7 +70,8 @@ class Tier:
     ``values``: the swept values of a study (None: the study file's);
     ``fixed``: scene fields set in every run; ``estimate_s``: the wall time
     on one rank of the project's machine, for the time-left estimate before
-    the case has run.
+    the case has run (1.4 times the 2-rank wall times of the reports of
+    2026-12-06, docs/reproduction).
     """
 
     resolution: str | None = None
@@ -127,7 +128,7 @@ CASES: tuple[Case, ...] = (
         "Sneddon plate (sec. 3.1, Table 1, 11 points)",
         "scene",
         "meshes/scenes/sneddon_plate.toml",
-        {"quick": Tier("coarse", estimate_s=5), "full": Tier(None, estimate_s=10)},
+        {"quick": Tier("coarse", estimate_s=2), "full": Tier(None, estimate_s=2)},
         sneddon,
         discretisation="DG2; README 'What is verified': -0.82 % (a/10) to -0.13 % (a/160) "
         "on a 50a plate; here the 1 m plate's own stiffness dominates",
@@ -139,7 +140,7 @@ CASES: tuple[Case, ...] = (
         "KGD, zero toughness (sec. 4.2, Figs. 8-10)",
         "scene",
         "meshes/scenes/kgd_strip.toml",
-        {"quick": Tier("coarse", estimate_s=8), "full": Tier(None, estimate_s=20)},
+        {"quick": Tier("coarse", estimate_s=4), "full": Tier(None, estimate_s=7)},
         kgd,
         discretisation="benchmarks/kgd_verification.py: dx 0.5 m on a 400 m plate: "
         "l -0.6 %, p +2.8 %, w -0.1 %",
@@ -151,7 +152,7 @@ CASES: tuple[Case, ...] = (
         "KGD mesh series, no background stress (sec. 4.2, Fig. 8)",
         "study",
         "studies/kgd_mesh.toml",
-        {"quick": Tier(estimate_s=8), "full": Tier(estimate_s=8)},
+        {"quick": Tier(estimate_s=18), "full": Tier(estimate_s=14)},
         kgd_series("dx", None, "Fig. 8"),
         discretisation="the series is the mesh study: dx = 4 -> 0.5 m along the path",
         figures=("series.png",),
@@ -162,7 +163,7 @@ CASES: tuple[Case, ...] = (
         "KGD mesh series, 5 MPa background stress (sec. 4.2, Fig. 9)",
         "study",
         "studies/kgd_mesh_stress.toml",
-        {"quick": Tier(estimate_s=9), "full": Tier(estimate_s=9)},
+        {"quick": Tier(estimate_s=15), "full": Tier(estimate_s=13)},
         kgd_series("dx", stress_worsens_coarse, "Fig. 9"),
         discretisation="the series is the mesh study: dx = 4 -> 0.5 m along the path",
         figures=("series.png",),
@@ -173,7 +174,7 @@ CASES: tuple[Case, ...] = (
         "KGD time-step series at dx = 0.5 m (sec. 4.2, Fig. 10)",
         "study",
         "studies/kgd_time_step.toml",
-        {"quick": Tier(estimate_s=20), "full": Tier(estimate_s=20)},
+        {"quick": Tier(estimate_s=37), "full": Tier(estimate_s=34)},
         kgd_series("dt", longer_step_runs_further, "Fig. 10"),
         discretisation="the series is the time-step study: dt = 2 -> 0.25 s",
         figures=("series.png",),
@@ -184,7 +185,7 @@ CASES: tuple[Case, ...] = (
         "Griffith crack with background stress (sec. 4.1, Table 1, eq. 17)",
         "scene",
         "meshes/scenes/griffith_plate.toml",
-        {"quick": Tier("coarse", estimate_s=3), "full": Tier(None, estimate_s=4)},
+        {"quick": Tier("coarse", estimate_s=1), "full": Tier(None, estimate_s=1)},
         griffith,
         discretisation="DG2; centre opening -4.12 / -3.78 / -3.55 % at h = 1 / 0.5 / "
         "0.25 m (L/10 to L/40) on the 100 m plate: the plate's fixed edges dominate",
@@ -196,7 +197,7 @@ CASES: tuple[Case, ...] = (
         "Rubin's PMMA experiment (sec. 4.3, Figs. 11-15)",
         "scene",
         "meshes/scenes/rubin_pmma.toml",
-        {"quick": Tier("coarse", estimate_s=5), "full": Tier(None, estimate_s=8)},
+        {"quick": Tier("coarse", estimate_s=7), "full": Tier(None, estimate_s=7)},
         rubin,
         discretisation="the peak moves with the mesh: 8.17 MPa (coarse, 586 cells), 7.66 "
         "(default, 1,776), 6.99 (4.5 mm, 3,536), 6.29 (3.25 mm, 6,650); within 1 % of its "
@@ -214,8 +215,8 @@ CASES: tuple[Case, ...] = (
         "convergence",
         "studies/hubbert_willis_limit.toml",
         {
-            "quick": Tier(values=_BOREHOLE_H, estimate_s=60),
-            "full": Tier(values=_BOREHOLE_H, estimate_s=60),
+            "quick": Tier(values=_BOREHOLE_H, estimate_s=28),
+            "full": Tier(values=_BOREHOLE_H, estimate_s=25),
         },
         borehole_limit(wet=False),
         figures=("convergence.png",),
@@ -227,8 +228,8 @@ CASES: tuple[Case, ...] = (
         "convergence",
         "studies/haimson_fairhurst_limit.toml",
         {
-            "quick": Tier(values=_BOREHOLE_H, estimate_s=80),
-            "full": Tier(values=_BOREHOLE_H, estimate_s=80),
+            "quick": Tier(values=_BOREHOLE_H, estimate_s=27),
+            "full": Tier(values=_BOREHOLE_H, estimate_s=23),
         },
         borehole_limit(wet=True),
         figures=("convergence.png",),
@@ -239,7 +240,7 @@ CASES: tuple[Case, ...] = (
         "Breakdown against Sh (SH 20 MPa), seepage ramp 1 MPa/s",
         "study",
         "studies/borehole_seepage_stress_ratio.toml",
-        {"quick": Tier("coarse", estimate_s=30), "full": Tier(None, estimate_s=90)},
+        {"quick": Tier("coarse", estimate_s=15), "full": Tier(None, estimate_s=12)},
         trend(
             "breakdown against Sh",
             paper_trend(references.PFC2D_STRESS_RATIO, "Sh", 1e-6, "MPa", "sec. 4.1, 1e-5 m3/s"),
@@ -259,8 +260,8 @@ CASES: tuple[Case, ...] = (
         "study",
         "studies/borehole_seepage_rate.toml",
         {
-            "quick": Tier("coarse", ("0.1 MPa/s", "3 MPa/s", "100 MPa/s"), estimate_s=25),
-            "full": Tier(None, estimate_s=90),
+            "quick": Tier("coarse", ("0.1 MPa/s", "3 MPa/s", "100 MPa/s"), estimate_s=8),
+            "full": Tier(None, estimate_s=15),
         },
         trend(
             "breakdown against rate",
@@ -281,8 +282,8 @@ CASES: tuple[Case, ...] = (
         "study",
         "studies/borehole_seepage_viscosity.toml",
         {
-            "quick": Tier("coarse", ("1 mPa.s", "1 Pa.s", "10 Pa.s"), estimate_s=25),
-            "full": Tier(None, estimate_s=90),
+            "quick": Tier("coarse", ("1 mPa.s", "1 Pa.s", "10 Pa.s"), estimate_s=10),
+            "full": Tier(None, estimate_s=15),
         },
         trend(
             "breakdown against viscosity",
@@ -303,8 +304,8 @@ CASES: tuple[Case, ...] = (
         "study",
         "studies/borehole_seepage_aperture.toml",
         {
-            "quick": Tier("coarse", ("1 um", "5 um", "20 um"), estimate_s=25),
-            "full": Tier(None, estimate_s=90),
+            "quick": Tier("coarse", ("1 um", "5 um", "20 um"), estimate_s=9),
+            "full": Tier(None, estimate_s=12),
         },
         trend(
             "breakdown against permeability",
@@ -322,7 +323,7 @@ CASES: tuple[Case, ...] = (
         "Breakdown against Weibull modulus m (heterogeneity)",
         "study",
         "studies/borehole_seepage_weibull.toml",
-        {"full": Tier(None, estimate_s=90)},
+        {"full": Tier(None, estimate_s=9)},
         trend(
             "breakdown against Weibull m",
             "rises as the rock gets more homogeneous, larger m (sec. 3.4; no values printed)",
@@ -340,7 +341,7 @@ CASES: tuple[Case, ...] = (
         "Shear share of the failures against the pumping rate (pumped borehole)",
         "study",
         "studies/borehole_pumping_shear_rate.toml",
-        {"full": Tier(None, estimate_s=90)},  # listed, not judged: not in the quick tier
+        {"full": Tier(None, estimate_s=200)},  # listed, not judged: not in the quick tier
         trend(
             "shear share of the failures against rate",
             "rises with the injection rate; all tensile at the lowest (sec. 3.1, Fig. 4)",
@@ -360,7 +361,7 @@ CASES: tuple[Case, ...] = (
         "Shear share of the failures against the fluid viscosity (pumped borehole)",
         "study",
         "studies/borehole_pumping_shear_viscosity.toml",
-        {"full": Tier(None, estimate_s=80)},  # listed, not judged: not in the quick tier
+        {"full": Tier(None, estimate_s=170)},  # listed, not judged: not in the quick tier
         trend(
             "shear share of the failures against viscosity",
             "rises with the viscosity; all tensile at the lowest (sec. 3.2, Fig. 8)",
@@ -379,7 +380,7 @@ CASES: tuple[Case, ...] = (
         "Shear share of the failures against Weibull modulus m (pumped borehole)",
         "study",
         "studies/borehole_pumping_shear_weibull.toml",
-        {"full": Tier(None, estimate_s=75)},  # listed, not judged: not in the quick tier
+        {"full": Tier(None, estimate_s=200)},  # listed, not judged: not in the quick tier
         trend(
             "shear share of the failures against Weibull m",
             "falls sharply as the rock gets more homogeneous, larger m; 41 % (32 of 78) at "
@@ -399,7 +400,7 @@ CASES: tuple[Case, ...] = (
         "Shear share of the failures against the joints' permeability (pumped borehole)",
         "study",
         "studies/borehole_pumping_shear_permeability.toml",
-        {"quick": Tier(None, estimate_s=120), "full": Tier(None, estimate_s=120)},
+        {"quick": Tier(None, estimate_s=240), "full": Tier(None, estimate_s=240)},
         all_tensile(
             "shear share of the failures against permeability",
             "all tensile, insignificant shear strain, at every permeability (sec. 3.5, "
@@ -418,7 +419,7 @@ CASES: tuple[Case, ...] = (
         "Lab specimen, azimuth 30/45/60 deg (sec. 3.2)",
         "study",
         "studies/lab_azimuth.toml",
-        {"quick": Tier("coarse", estimate_s=400), "full": Tier("coarse", estimate_s=400)},
+        {"quick": Tier("coarse", estimate_s=210), "full": Tier("coarse", estimate_s=200)},
         lab_specimen,
         discretisation="coarse (2 mm at the perforations); at the default mesh (1 mm) 60 deg "
         "peaks at 10.07 MPa (+1.6 %), again cut short by the validity limit (2.5 s), with "
@@ -433,7 +434,7 @@ CASES: tuple[Case, ...] = (
         "Perforation No. 2, the main scene (sec. 4, Fig. 15)",
         "scene",
         "meshes/scenes/perforation_no2.toml",
-        {"quick": Tier("coarse", estimate_s=200), "full": Tier("coarse", estimate_s=200)},
+        {"quick": Tier("coarse", estimate_s=48), "full": Tier("coarse", estimate_s=48)},
         peak_against(
             "breakdown (peak pressure)",
             references.CHARGES["no2"],
@@ -456,7 +457,7 @@ CASES: tuple[Case, ...] = (
         "Perforation No. 2 with the joints filling in time (sec. 4.4, Figs. 14 and 15)",
         "scene",
         "meshes/scenes/perforation_no2.toml",
-        {"full": Tier("coarse", fixed=SEEPAGE_RUNG, estimate_s=600)},
+        {"full": Tier("coarse", fixed=SEEPAGE_RUNG, estimate_s=750)},
         saturation_in_time,
         discretisation="large: the joints' void follows the mesh (1.085 / 2.071 / 3.217 m^2 "
         "of joints in the zone at the coarse / default / paper mesh, docs/seepage.md); at the "
@@ -472,7 +473,7 @@ CASES: tuple[Case, ...] = (
         "The four charges (sec. 4.4, Fig. 15)",
         "study",
         "studies/four_charges.toml",
-        {"full": Tier("coarse", estimate_s=900)},
+        {"full": Tier("coarse", estimate_s=260)},
         four_charges,
         discretisation="as No. 2 (coarse)",
         figures=("study.png", DEGREE_FIGURE, STRESS_FIGURE),
@@ -483,7 +484,7 @@ CASES: tuple[Case, ...] = (
         "The shape study (sec. 5, Tables 7-8, Fig. 21)",
         "study",
         "studies/shape_study.toml",
-        {"full": Tier("coarse", estimate_s=2400)},
+        {"full": Tier("coarse", estimate_s=640)},
         shape_study,
         discretisation="as No. 2 (coarse)",
         figures=("study.png", DEGREE_FIGURE),
@@ -494,7 +495,7 @@ CASES: tuple[Case, ...] = (
         "Field cluster, Changqing (sec. 3.3)",
         "scene",
         "meshes/scenes/field_cluster.toml",
-        {"full": Tier("coarse", estimate_s=3300)},
+        {"full": Tier("coarse", estimate_s=570)},
         peak_against(
             "breakdown (peak pressure)",
             references.FIELD_MEASURED,
