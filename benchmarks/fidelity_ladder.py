@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import functools
 import re
 import tempfile
 import time
@@ -151,7 +152,8 @@ def main() -> None:
     )
     args = ap.parse_args()
     comm = MPI.COMM_WORLD
-    say = print if args.progress and comm.rank == 0 else None
+    # flushed: a run of hours is followed through a redirected file
+    say = functools.partial(print, flush=True) if args.progress and comm.rank == 0 else None
     rows, splits = [], []
     for rung in args.rungs:
         with tempfile.TemporaryDirectory() as tmp:
