@@ -27,7 +27,10 @@ ones (from the run's ``step_costs.csv``).  The rungs:
   then (at most a step late);
 - ``seepage-tolerance``: ``seepage`` with ``solver.break_landing = "tolerance"``:
   a step is shortened onto its first break only when it moved the cavity
-  pressure by more than ``solver.break_tolerance`` (1 %) of it.
+  pressure by more than ``solver.break_tolerance`` (1 %) of it;
+- ``seepage-wet``: ``seepage`` with the joints full at the cavity's starting
+  30 MPa (``injection.joint_pressure``: the rock's pore pressure, the well
+  balanced), not dry.
 
     make run CMD="python3 benchmarks/fidelity_ladder.py --rungs uniform uniform-water viscous"
     make run CMD="python3 benchmarks/fidelity_ladder.py --rungs seepage"   # about 15 min coarse
@@ -63,8 +66,16 @@ RUNGS = (
     "seepage-reduced",
     "seepage-step",
     "seepage-tolerance",
+    "seepage-wet",
 )
-SEEPAGE = ("seepage", "seepage-kw", "seepage-reduced", "seepage-step", "seepage-tolerance")
+SEEPAGE = (
+    "seepage",
+    "seepage-kw",
+    "seepage-reduced",
+    "seepage-step",
+    "seepage-tolerance",
+    "seepage-wet",
+)
 LANDING = {"seepage-step": "step", "seepage-tolerance": "tolerance"}
 
 
@@ -80,6 +91,10 @@ def scene_text(rung: str) -> str:
         text = re.sub(r'(?m)^wall_joints = "[a-z]+"', 'wall_joints = "seepage"', text)
     if rung in LANDING:
         text = text.replace("[solver]\n", f'[solver]\nbreak_landing = "{LANDING[rung]}"\n', 1)
+    if rung == "seepage-wet":
+        text = re.sub(
+            r'(?m)^(initial_pressure = "([^"]*)".*)$', r'\1\njoint_pressure = "\2"', text, count=1
+        )
     if rung == "seepage-reduced":
         text = text.replace("[solver]\n", '[solver]\nsolid = "reduced"\n', 1)
     if rung == "viscous":

@@ -19,10 +19,15 @@ A, SH, SHMIN, T0 = 0.03, 20e6, 12e6, 5e6
 WALL = ("wellbore_wall",)
 
 
-def borehole_plate(comm: MPI.Comm = MPI.COMM_WORLD) -> TaggedMesh:
-    """Mesh the plate with wall elements a/5 on ``comm``."""
+def borehole_plate(comm: MPI.Comm = MPI.COMM_WORLD, wall_division: int = 5) -> TaggedMesh:
+    """Mesh the plate with wall elements a/5 (a / ``wall_division``) on ``comm``."""
     sizing = MeshSizing(
-        A / 5, 0.1, grading=0.25, wall_rings=4, circle_elements=6, size_integration="exact"
+        A / wall_division,
+        0.1,
+        grading=0.25,
+        wall_rings=4,
+        circle_elements=6,
+        size_integration="exact",
     )
     return mesh_geometry(BoreholeSquare(Plate(1.0, 1.0), Wellbore(2 * A, "z"), sizing), comm=comm)
 

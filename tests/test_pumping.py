@@ -14,10 +14,11 @@ import dolfinx
 import numpy as np
 import pytest
 import ufl
-from borehole import WALL, A, borehole_plate, borehole_solid
+from borehole import SH, SHMIN, T0, WALL, A, borehole_plate, borehole_solid
 from mpi4py import MPI
 
 import hfcdem.coupling.pumping as pumping_module
+from hfcdem import analytic
 from hfcdem.config.materials import Fluid
 from hfcdem.coupling.penetration import CavityPumping
 from hfcdem.coupling.pumping import (
@@ -28,7 +29,7 @@ from hfcdem.coupling.pumping import (
 )
 from hfcdem.solid.forms import Loads
 from hfcdem.solid.interfaces import FacetState
-from hfcdem.solid.states import SLIP
+from hfcdem.solid.states import SLIP, CascadeStopped
 
 Q = 2e-6  # m^2/s per metre of borehole (seed 001)
 
@@ -71,6 +72,74 @@ def test_sealed_cavity_breaks_down_at_the_dry_first_break(plate):
     assert run.secant_balances == 0  # every balance one Newton with the joints
     # the crack opens by at most 0.024 of its cells' size (measured): far from LOOSE_JUMP
     assert run.stopped is None and not run.validity_limit
+
+
+def _first_break(tmesh, p0: float, wet: bool) -> float:
+    """The linear ramp's first break (total cavity pressure) from the cavity at ``p0``.
+
+    ``wet``: every joint of the zone full at ``p0`` (on the faces of what breaks too).
+    """
+    solid = _solid(tmesh)
+    pj = np.full(solid.num_facets, p0) if wet else None
+    base = Loads(cavity={WALL[0]: p0}, crack_pressure=0.0 if pj is None else pj, joint_pressure=pj)
+    unit = Loads(cavity={WALL[0]: 1.0}, in_situ_factor=0.0)
+    try:
+        return p0 + solid.ramp(base, unit, 40e6)
+    except CascadeStopped as stop:  # wet: the first break runs on through the zone
+        assert stop.first_break is not None
+        return p0 + stop.first_break
+
+
+def test_joints_full_at_a_pore_pressure_lower_the_first_break_by_the_effective_stress():
+    """Hubbert-Willis with a pore pressure: 3 Sh - SH + T0 - p0 (16 MPa at p0 = 5 MPa).
+
+    The joints' pressure loads only the inside of the rock, so the total stress
+    does not move and the springs' tension rises by it.  The point strength at
+    the wall converges slowly (dry: -31, -23, -14 % at a/5, a/10, a/20): the wet
+    first break carries the same relative error, and its shift tends to p0
+    (0.63, 0.77, 0.86 of it, measured).
+    """
+    p0, hw = 5e6, analytic.hubbert_willis_breakdown(SH, SHMIN, T0)
+    assert analytic.hubbert_willis_breakdown(SH, SHMIN, T0, pore_pressure=p0) == hw - p0
+    errors, shifts = [], []
+    for division in (5, 10, 20):
+        tmesh = borehole_plate(wall_division=division)
+        dry, wet = _first_break(tmesh, p0, False), _first_break(tmesh, p0, True)
+        errors.append((dry / hw - 1.0, wet / (hw - p0) - 1.0))
+        shifts.append((dry - wet) / p0)
+    # measured: (-0.313, -0.296), (-0.234, -0.234), (-0.138, -0.136)
+    assert all(abs(d - w) < 0.02 for d, w in errors)
+    assert errors[0][1] < errors[1][1] < errors[2][1] < -0.1
+    assert 0.6 < shifts[0] < shifts[1] < shifts[2] < 0.9
+
+
+def test_pumping_with_joints_full_at_a_pore_pressure_breaks_at_the_wet_first_break(plate):
+    """``CavityPumping.joint_pressure``: the joints start full at it, not dry.
+
+    Joints of 1 nm take almost nothing in 40 s: the first break is the linear
+    ramp's with every joint at p0 (measured 1.0e-5 below: the wall joints'
+    pressure creeps up), 3.2 MPa below the dry one on this mesh.
+    """
+    p0 = 5e6
+    wet, dry = _first_break(plate, p0, True), _first_break(plate, p0, False)
+    starts = []
+    pumping = CavityPumping(Q, 40.0, steps=100, initial_pressure=p0, joint_pressure=p0)
+    run = pump_with_seepage(
+        _solid(plate),
+        WALL,
+        Fluid(viscosity=1.0),
+        1e-9,
+        pumping,
+        frames=lambda t, p, sat: starts.append((p.copy(), sat.copy())) if t == 0.0 else None,
+    )
+    assert wet * (1 - 2e-5) < run.first_pressure <= wet * (1 + 4e-8)
+    assert dry - wet > 3e6
+    assert run.first_mode == FacetState.TENSILE and run.initial_failures == 0
+    pressure, saturation = starts[0]
+    assert np.all(saturation == 1.0) and np.allclose(pressure, p0, rtol=1e-12)
+    assert run.max_mass_error < 1e-9
+    with pytest.raises(ValueError, match="joint_pressure"):
+        CavityPumping(Q, 40.0, joint_pressure=-1.0)
 
 
 def test_a_block_moving_out_of_the_rock_ends_the_run_at_its_validity_limit(plate, monkeypatch):

@@ -179,6 +179,38 @@ def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
         seepage_loading(load_scene(PUMPING, "coarse", overrides={"injection.wall_film": "5 um"}))
 
 
+def test_joints_full_at_a_pore_pressure_start_wet_and_break_the_wall_lower(shared_tmp_path):
+    """``injection.joint_pressure``: the zone's joints start full at the rock's pore pressure.
+
+    At 5 MPa (the cavity too), the first break lies between every joint at the
+    cavity pressure (8.83 MPa on this mesh) and every joint held at 5 MPa
+    (11.26 MPa: tests/test_pumping.py).
+    """
+    wet = {"injection.joint_pressure": "5 MPa", "injection.initial_pressure": "5 MPa"}
+    scene = load_scene(PUMPING, "coarse", overrides=wet)
+    assert seepage_loading(scene).joint_pressure == pytest.approx(5e6)
+    lines: list[str] = []
+    summary = run_scene(scene, shared_tmp_path / "wet", say=lines.append)
+    assert any("start full at 5 MPa" in line for line in lines)
+    assert summary["joint_pressure_at_start_MPa"] == pytest.approx(5.0)
+    assert 8.83 < summary["first_crack_pressure_MPa"] < 11.26
+    assert summary["first_crack"]["mode"] == "tensile" and summary["max_mass_error"] < 1e-9
+    frames = read_pvd(shared_tmp_path / "wet" / "joints.pvd")
+    if MPI.COMM_WORLD.rank == 0:
+        first = meshio.read(shared_tmp_path / "wet" / frames[0][1])
+        assert first.cell_data["saturation"][0].min() == 1.0
+    for field, value, match in (
+        ("injection.joint_pressure", "-1 MPa", r"injection\.joint_pressure.*\[0, 1 GPa\]"),
+        ("injection.joint_pressure", "5 mm", r"injection\.joint_pressure"),
+    ):
+        with pytest.raises(SceneError, match=match):
+            load_scene(PUMPING, "coarse", overrides={field: value})
+    with pytest.raises(SceneError, match=r"injection\.joint_pressure.*seepage run"):
+        load_scene(PUMPING, "coarse", overrides={"injection.wall_joints": "dry", **wet})
+    with pytest.raises(SceneError, match=r"injection\.joint_pressure.*pumped rate"):
+        seepage_loading(_scene(**wet))
+
+
 class _Stop(Exception):
     pass
 

@@ -46,6 +46,8 @@ them so a run's record can print what was assumed.  Any invalid field raises
     wall_film = "5 um"          # fluid storage = film thickness x pressurised wall area
     wall_joints = "wet"         # "dry", "wet" (the wall's), "permeated" (open cracks' too) or
                                 # "seepage" (joints fill in time; a pressure_schedule ramp)
+    joint_pressure = "30 MPa"   # seepage, pumped: the zone's joints start full at this pore
+                                # pressure (left out: they start dry)
     rigid_cavity = false        # true: the stored volume ignores the wall motion
 
     [load]                      # instead of [injection]: one static solve
@@ -194,6 +196,7 @@ class Physics:
     wellbore: str = "cased"
     wall_film: float | None = None
     wall_joints: str = "dry"
+    joint_pressure: float | None = None  # Pa, the joints' at t = 0 (seepage); None: dry
     joint_aperture: float = JOINT_HYDRAULIC_APERTURE  # m, the intact joints' (seepage)
     joint_reference_size: float | None = None  # m, cell size at which joint_aperture holds
     pressure_step: float | None = None  # Pa per step of a seepage ramp (None: time_step)
@@ -390,7 +393,7 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
         ld.finish()
         load: StaticLoad | None = StaticLoad(pressure)
         injection, duration, p0, extra, wellbore = None, 0.0, 0.0, 0.0, "cased"
-        film, joints, rigid, pressure_step = None, "dry", False, None
+        film, joints, rigid, pressure_step, wet = None, "dry", False, None, None
     else:
         load = None
         inj = r.section("injection")
@@ -414,6 +417,18 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
             (Physics, "wall_joints"),
             choices=WALL_JOINTS,
         )
+        wet = inj.quantity("joint_pressure", "stress") if inj.has("joint_pressure") else None
+        _check(
+            wet is None or 0.0 <= wet <= _LARGEST_STRESS,
+            "injection.joint_pressure",
+            f"expected a pore pressure in [0, 1 GPa], got {wet!r} Pa",
+        )
+        _check(
+            wet is None or joints == "seepage",
+            "injection.joint_pressure",
+            'the joints\' starting pressure is taken by a seepage run (wall_joints = "seepage") '
+            "only; the other rungs have no fluid in intact joints",
+        )
         rigid = inj.raw("rigid_cavity") if inj.has("rigid_cavity") else False
         _check(
             isinstance(rigid, bool), "injection.rigid_cavity", f"expected true or false: {rigid!r}"
@@ -433,6 +448,7 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
         "wellbore": wellbore,
         "wall_film": film,
         "wall_joints": joints,
+        "joint_pressure": wet,
         "pressure_step": pressure_step,
         "rigid_cavity": rigid,
         "load": load,

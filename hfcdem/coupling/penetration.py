@@ -99,8 +99,9 @@ class CavityPumping:
     plus ``extra_volume``) and ``dV/dP`` of its walls (from the solid: one
     solve at a unit cavity pressure); the joints at its wall take their share
     each step, the cavity pressure being the one that balances the step's
-    volume.  ``steps`` equal steps; ``initial_pressure`` in the cavity at t = 0
-    (the joints start dry).  ``max_dt`` (s): the pumped run of
+    volume.  ``steps`` equal steps; ``initial_pressure`` in the cavity at t = 0.
+    ``joint_pressure``: the joints start full at this pressure (Pa; the rock's
+    pore pressure), or dry (None).  ``max_dt`` (s): the pumped run of
     :mod:`hfcdem.coupling.pumping` may grow a quiet step up to it; None keeps
     every step at :attr:`dt`.  ``land_on_breaks``: a step in which an
     interface first fails is shortened to land on it (False: the interfaces
@@ -118,6 +119,7 @@ class CavityPumping:
     max_dt: float | None = None
     land_on_breaks: bool = True
     landing_tolerance: float = 0.0
+    joint_pressure: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("rate", "duration", "initial_pressure", "extra_volume"):
@@ -149,6 +151,12 @@ class CavityPumping:
         if self.max_dt is not None and not (math.isfinite(self.max_dt) and self.max_dt > 0.0):
             raise ValueError(
                 f"CavityPumping.max_dt must be a finite time > 0 s or None, got {self.max_dt!r}"
+            )
+        p = self.joint_pressure
+        if p is not None and not (math.isfinite(p) and 0.0 <= p <= 1e9):
+            raise ValueError(
+                f"CavityPumping.joint_pressure must be None (dry joints) or a pressure in "
+                f"[0, 1 GPa] (Pa), got {p!r}"
             )
 
     @property
@@ -194,6 +202,17 @@ class RampBreakdown:
     max_mass_error: float = 0.0
 
 
+def joints_at_start(loading: PressureRamp | CavityPumping) -> float | None:
+    """Return the joints' pressure at t = 0 (Pa), or None: they start dry.
+
+    A compressible ramp's joints start full at its initial pressure; pumping's
+    at its ``joint_pressure`` when it has one.
+    """
+    if isinstance(loading, CavityPumping):
+        return loading.joint_pressure
+    return loading.initial_pressure if loading.filling == "compressible" else None
+
+
 def ramp_breakdown(
     solid: CDEMSolid,
     cavity: Sequence[str],
@@ -220,7 +239,7 @@ def ramp_breakdown(
     joints = np.flatnonzero((solid.state == FacetState.INTACT) & ~solid.is_crack)
     # the state the ramp starts from (excavated, cavity at P0): what fails there, e.g. on
     # stress noise where the wall mesh changes, breaks first and is not the breakdown
-    p0 = ramp.initial_pressure if ramp.filling == "compressible" else 0.0
+    p0 = joints_at_start(ramp) or 0.0
     start = Loads(
         cavity={name: ramp.initial_pressure for name in cavity},
         joint_pressure=np.where(np.isin(np.arange(solid.num_facets), joints), p0, 0.0),
@@ -285,9 +304,16 @@ class _Drive:
         void = None
         if isinstance(aperture, JointAperture):
             aperture, void = network_apertures(solid, self.net, self.joints, aperture, self.local)
+        wet = joints_at_start(ramp)
         if ramp.filling == "saturation":  # dry joints hold no pressure
             self.seep = JointSeepage(
-                self.net, aperture, fluid, filling="saturation", saturation=0.0, void_aperture=void
+                self.net,
+                aperture,
+                fluid,
+                pressure=wet or 0.0,
+                filling="saturation",
+                saturation=0.0 if wet is None else 1.0,
+                void_aperture=void,
             )
         else:
             self.seep = JointSeepage(
@@ -486,6 +512,7 @@ __all__ = [
     "PressureRamp",
     "RampBreakdown",
     "illinois_root",
+    "joints_at_start",
     "ramp_breakdown",
     "settle_excavation",
 ]

@@ -239,32 +239,49 @@ def pump_with_seepage(
     for name in (*cavity, *supports):
         solid.tmesh.facet_tag(name)  # clear error for unknown groups
     solid.free_interfaces(np.ones(solid.num_facets, dtype=bool))  # (0 in the full mode)
-    start = Loads(cavity={name: pumping.initial_pressure for name in cavity})
     try:
-        initial_failures = settle_excavation(solid, start)
+        initial_failures = settle_excavation(solid, _start_loads(solid, cavity, pumping))
     except CascadeStopped as stop:
-        p0 = pumping.initial_pressure
-        return PumpingResult(
-            None, None, None, None, None, None, p0, 0.0, True, stop.broken, 0,
-            stopped=f"the excavated rock fails before pumping: {stop}",
-        )  # fmt: skip
+        why = f"the excavated rock fails before pumping: {stop}"
+        return _stopped_before_pumping(pumping, stop.broken, why)
     try:
         run = _PumpedCavity(
             solid, tuple(cavity), fluid, aperture, pumping, tuple(supports), contact_hysteresis
         )
     except ValidityLimit as stop:
-        p0 = pumping.initial_pressure
-        return PumpingResult(
-            None, None, None, None, None, None, p0, 0.0, True, initial_failures, 0,
-            stopped=f"the excavated rock is past the validity limit before pumping: {stop}",
-            validity_limit=True,
-        )  # fmt: skip
+        why = f"the excavated rock is past the validity limit before pumping: {stop}"
+        return _stopped_before_pumping(pumping, initial_failures, why, validity_limit=True)
     try:
         return run.run(
             initial_failures, progress, max_state_iterations, frames, at_first_break, records
         )
     finally:
         run.seep.destroy()
+
+
+def _start_loads(solid: CDEMSolid, cavity: Sequence[str], pumping: CavityPumping) -> Loads:
+    """Return the excavated state's loads: the cavity at its start pressure, wet joints at theirs.
+
+    Wet joints load every interface of the zone, inside the intact ones and on
+    the faces of those that break as the excavation settles (the pore fluid
+    stays in them).
+    """
+    cav = {name: pumping.initial_pressure for name in cavity}
+    if pumping.joint_pressure is None:
+        return Loads(cavity=cav)
+    pj = np.full(solid.num_facets, pumping.joint_pressure)
+    return Loads(cavity=cav, crack_pressure=pj, joint_pressure=pj)
+
+
+def _stopped_before_pumping(
+    pumping: CavityPumping, failures: int, why: str, validity_limit: bool = False
+) -> PumpingResult:
+    """Return the result of a run that ended before its first step."""
+    p0 = pumping.initial_pressure
+    return PumpingResult(
+        None, None, None, None, None, None, p0, 0.0, True, failures, 0,
+        stopped=why, validity_limit=validity_limit,
+    )  # fmt: skip
 
 
 def facet_openings(solid: CDEMSolid, u: dolfinx.fem.Function) -> np.ndarray:
@@ -404,7 +421,9 @@ class _PumpedCavity:
         boundary = np.union1d(self.walls, crack_vertices)
         facets = np.flatnonzero(~self.cracks)
         net = joint_network(solid, boundary, facets)
-        q = np.full(net.size, -self.kw)  # dry
+        # the joints not met before hold what the zone's joints started with
+        wet = self.pumping.joint_pressure
+        q = np.full(net.size, -self.kw if wet is None else wet)
         if old is not None and old_q is not None:
             index = old.index()
             for i, key in enumerate(net.keys):

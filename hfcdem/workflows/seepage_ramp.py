@@ -112,6 +112,12 @@ def seepage_loading(scene: Scene) -> PressureRamp | CavityPumping:
             landing_tolerance=(
                 phys.solver.break_tolerance if phys.solver.break_landing == "tolerance" else 0.0
             ),
+            joint_pressure=phys.joint_pressure,
+        )
+    if phys.joint_pressure is not None:
+        raise SceneError(
+            "injection.joint_pressure",
+            "a seepage pressure ramp starts its joints dry: joint_pressure is for a pumped rate",
         )
     if phys.solver.break_landing != "exact":
         raise SceneError(
@@ -175,7 +181,11 @@ def run_seepage_ramp(
     say(
         f"seepage: {what} from {ramp.initial_pressure / 1e6:.4g} MPa, {ramp.steps} steps; "
         f"joints of hydraulic aperture {phys.joint_aperture * 1e6:.3g} um{_held_at(phys)} "
-        "fill from dry"
+        + (
+            "fill from dry"
+            if phys.joint_pressure is None
+            else f"start full at {phys.joint_pressure / 1e6:.4g} MPa"
+        )
     )
     if isinstance(ramp, CavityPumping):
         return _run_pumped(scene, solid, (cavity, supports), ramp, out, say, record)
@@ -356,6 +366,10 @@ def _run_pumped(
         "joints_holding_pressure": result.history[-1][6] if result.history else 0.0,
         "joint_aperture_m": phys.joint_aperture,
         "joint_reference_size_m": phys.joint_reference_size,
+        # None: the joints started dry
+        "joint_pressure_at_start_MPa": (
+            None if pumping.joint_pressure is None else pumping.joint_pressure / 1e6
+        ),
         "pumping_rate_m3_per_s": pumping.rate,
         "max_mass_error": result.max_mass_error,
         "secant_balances": result.secant_balances,
