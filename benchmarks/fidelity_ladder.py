@@ -68,14 +68,7 @@ RUNGS = (
     "seepage-tolerance",
     "seepage-wet",
 )
-SEEPAGE = (
-    "seepage",
-    "seepage-kw",
-    "seepage-reduced",
-    "seepage-step",
-    "seepage-tolerance",
-    "seepage-wet",
-)
+SEEPAGE = tuple(rung for rung in RUNGS if rung.startswith("seepage"))
 LANDING = {"seepage-step": "step", "seepage-tolerance": "tolerance"}
 
 
