@@ -53,8 +53,7 @@ def local_network(solid: CDEMSolid, cavity_vertices: np.ndarray) -> LocalNetwork
         solid.vertex_coords[owned],
         cavity_vertices,
     )
-    index = net.index()
-    positions = np.array([index[k] for k in facet_keys(solid.vertex_ids[local])], dtype=np.int64)
+    positions = net.positions(solid.vertex_ids[local])
     owned_sel = solid.owned[local]
     view = NetworkView(local, positions, owned_sel, net.size)
     contact_open = (solid.contact[local] == OPEN).astype(float)

@@ -425,11 +425,9 @@ class _PumpedCavity:
         wet = self.pumping.joint_pressure
         q = np.full(net.size, -self.kw if wet is None else wet)
         if old is not None and old_q is not None:
-            index = old.index()
-            for i, key in enumerate(net.keys):
-                j = index.get(tuple(int(v) for v in key))
-                if j is not None:
-                    q[i] = old_q[j]
+            j = old.positions(net.keys)
+            met = j >= 0
+            q[met] = old_q[j[met]]
         sat = np.clip(np.where(q < 0.0, 1.0 + q / self.kw, 1.0), 0.0, 1.0)
         positions = network_positions(solid, net, facets)
         hydraulic, void = network_apertures(solid, net, facets, self.aperture, positions)

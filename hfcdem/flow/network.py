@@ -63,9 +63,24 @@ class Network:
         """Number of fracture facets."""
         return len(self.area)
 
-    def index(self) -> dict[tuple[int, ...], int]:
-        """Map from a facet key (sorted vertex ids) to its position."""
-        return {tuple(int(v) for v in k): i for i, k in enumerate(self.keys)}
+    def positions(self, keys: np.ndarray) -> np.ndarray:
+        """Position of each row of ``keys`` (global vertex ids, any order) here; -1 if absent."""
+        nv = self.keys.shape[1]
+        rows = np.sort(np.asarray(keys, dtype=np.int64).reshape(-1, nv), axis=1)
+        if not len(rows) or not self.size:
+            return np.full(len(rows), -1, dtype=np.int64)
+        radix = int(max(self.keys.max(), rows.max())) + 1
+        if radix**nv >= 2**63:  # ids too large for one integer per key
+            _, label = np.unique(np.vstack([self.keys, rows]), axis=0, return_inverse=True)
+            label = label.reshape(-1)
+            at = np.full(int(label.max()) + 1, -1, dtype=np.int64)
+            at[label[: self.size]] = np.arange(self.size)
+            return at[label[self.size :]]
+        # the keys as mixed-radix integers: sorted here, since the keys are in lexicographic order
+        weights = radix ** np.arange(nv - 1, -1, -1, dtype=np.int64)
+        mine, asked = self.keys @ weights, rows @ weights
+        found = np.minimum(np.searchsorted(mine, asked), self.size - 1)
+        return np.where(mine[found] == asked, found, -1)
 
     def transmissibility(
         self, aperture: np.ndarray, conductivity: Callable[[np.ndarray], np.ndarray]
@@ -126,32 +141,69 @@ def gather_rows(comm: MPI.Comm, rows: np.ndarray) -> np.ndarray:
 
 
 def _pairs(
-    e_star: list[int], e_fac: list[int], star_cavity: list[bool], num_facets: int
-) -> tuple[list[int], list[int], list[int], np.ndarray]:
+    e_star: np.ndarray, e_fac: np.ndarray, star_cavity: np.ndarray, num_facets: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Connect the entries of each star (a shared vertex or edge) to each other.
 
     A star on the cavity wall joins each entry to the cavity; any other joins
-    every pair of its entries (a junction as a zero-volume node).
+    every pair of its entries (a junction as a zero-volume node).  Pairs come
+    star by star, and within a star in the order of their entries.
     """
-    members: list[list[int]] = [[] for _ in star_cavity]
-    for e, s in enumerate(e_star):
-        members[s].append(e)
-    pa, pb, ps = [], [], []
     touches = np.zeros(num_facets, dtype=bool)
-    for s, mem in enumerate(members):
-        if star_cavity[s]:
-            for e in mem:
-                pa.append(e)
-                pb.append(CAVITY)
-                ps.append(s)
-                touches[e_fac[e]] = True
-        else:
-            for i in range(len(mem)):
-                for j in range(i + 1, len(mem)):
-                    pa.append(mem[i])
-                    pb.append(mem[j])
-                    ps.append(s)
-    return pa, pb, ps, touches
+    on_wall = star_cavity[e_star]
+    touches[e_fac[on_wall]] = True
+    wall = np.flatnonzero(on_wall)
+    pa, pb, ps = [wall], [np.full(len(wall), CAVITY, dtype=np.int64)], [e_star[wall]]
+    # the entries grouped by star, each group in entry order
+    order = np.argsort(e_star, kind="stable")
+    count = np.bincount(e_star, minlength=len(star_cavity))
+    start = np.cumsum(count) - count
+    for m in np.unique(count[~star_cavity]):
+        if m < 2:
+            continue
+        stars = np.flatnonzero((count == m) & ~star_cavity)
+        members = order[start[stars][:, None] + np.arange(m)]
+        i, j = np.triu_indices(int(m), 1)
+        pa.append(members[:, i].reshape(-1))
+        pb.append(members[:, j].reshape(-1))
+        ps.append(np.repeat(stars, len(i)))
+    a, b, s = (np.concatenate(x).astype(np.int64) for x in (pa, pb, ps))
+    sort = np.lexsort((b, a, s))
+    return a[sort], b[sort], s[sort], touches
+
+
+def _stars(
+    all_keys: np.ndarray, all_x: np.ndarray, cavity: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Give the stars (a facet's vertices in 2D, its edges in 3D) numbers as facets meet them.
+
+    Returns each entry's star (entries facet by facet, a facet's stars in a
+    fixed local order), each star's point (its vertex or its edge's midpoint),
+    cross-length (1 in 2D, the edge's length in 3D) and whether it lies on the
+    cavity wall (every vertex of it there).
+    """
+    n, nv = all_keys.shape
+    local = np.array([[0], [1]]) if nv == 2 else np.array([[0, 1], [1, 2], [0, 2]])
+    width = local.shape[1]
+    star_keys = all_keys[:, local].reshape(-1, width)
+    points = all_x[:, local].reshape(-1, width, 3)
+    if not n:
+        empty = np.zeros(0)
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 3)), empty, empty.astype(bool)
+    _, first, label = np.unique(star_keys, axis=0, return_index=True, return_inverse=True)
+    met = np.argsort(first)  # the stars in the order the entries first meet them
+    number = np.empty(len(met), dtype=np.int64)
+    number[met] = np.arange(len(met))
+    e_star = number[label.reshape(-1)]
+    first_entry = first[met]
+    star_point = points[first_entry].mean(axis=1)
+    if nv == 2:
+        cross = np.ones(len(met))
+    else:
+        ends = points[first_entry]
+        cross = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)
+    on_wall = np.asarray(np.isin(star_keys[first_entry], cavity).all(axis=1), dtype=bool)
+    return e_star, star_point, np.asarray(cross, dtype=float), on_wall
 
 
 def build_network(
@@ -185,41 +237,23 @@ def build_network(
     inverse[order] = np.arange(len(order))
     mine = inverse[offset : offset + len(skeys)]
 
-    cav = set(int(v) for v in np.unique(gather_rows(comm, np.asarray(cavity_vertices, np.int64))))
-    stars: dict[tuple[int, ...], int] = {}
-    star_point: list[np.ndarray] = []
-    star_cross: list[float] = []
-    star_cavity: list[bool] = []
-    e_fac, e_star, e_geom = [], [], []
-    local_pairs: list[tuple[int, ...]] = [(0,), (1,)] if nv == 2 else [(0, 1), (1, 2), (0, 2)]
+    cavity = np.unique(gather_rows(comm, np.asarray(cavity_vertices, np.int64)))
     centroid = all_x.mean(axis=1) if len(all_x) else np.zeros((0, 3))
-    for f in range(len(all_keys)):
-        for loc in local_pairs:
-            key = tuple(int(all_keys[f, i]) for i in loc)
-            s = stars.get(key)
-            if s is None:
-                s = stars[key] = len(star_point)
-                pts = all_x[f, list(loc)]
-                star_point.append(pts.mean(axis=0))
-                star_cross.append(1.0 if nv == 2 else float(np.linalg.norm(pts[1] - pts[0])))
-                star_cavity.append(all(k in cav for k in key))
-            dist = max(float(np.linalg.norm(centroid[f] - star_point[s])), 1e-300)
-            e_fac.append(f)
-            e_star.append(s)
-            e_geom.append(star_cross[s] / dist)
-    entry_facet = np.asarray(e_fac, dtype=np.int64)
-    entry_star = np.asarray(e_star, dtype=np.int64)
+    e_star, star_point, star_cross, star_cavity = _stars(all_keys, all_x, cavity)
+    per_facet = len(e_star) // max(len(all_keys), 1)  # stars of a facet
+    e_fac = np.repeat(np.arange(len(all_keys), dtype=np.int64), per_facet)
+    dist = np.maximum(np.linalg.norm(centroid[e_fac] - star_point[e_star], axis=1), 1e-300)
     pa, pb, ps, touches = _pairs(e_star, e_fac, star_cavity, len(all_keys))
     net = Network(
         keys=all_keys,
         area=all_area,
         centroid=centroid,
-        pair_a=np.asarray(pa, dtype=np.int64),
-        pair_b=np.asarray(pb, dtype=np.int64),
-        pair_star=np.asarray(ps, dtype=np.int64),
-        entry_facet=entry_facet,
-        entry_star=entry_star,
-        entry_geometry=np.asarray(e_geom, dtype=float),
+        pair_a=pa,
+        pair_b=pb,
+        pair_star=ps,
+        entry_facet=e_fac,
+        entry_star=e_star,
+        entry_geometry=star_cross[e_star] / dist,
         num_stars=len(star_point),
         touches_cavity=touches,
     )

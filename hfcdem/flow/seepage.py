@@ -97,9 +97,10 @@ def joint_network(
 
 def network_positions(solid: CDEMSolid, net: Network, facets: np.ndarray) -> np.ndarray:
     """Position in ``net`` of every local interface in ``facets`` (owned or ghost)."""
-    index = net.index()
-    keys = np.sort(solid.vertex_ids[np.asarray(facets, dtype=np.int64)], axis=1)
-    return np.asarray([index[tuple(int(v) for v in k)] for k in keys], dtype=np.int64)
+    positions = net.positions(solid.vertex_ids[np.asarray(facets, dtype=np.int64)])
+    if np.any(positions < 0):
+        raise ValueError("network_positions: a facet is not in the network")
+    return positions
 
 
 def network_values(
