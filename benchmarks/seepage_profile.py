@@ -8,9 +8,13 @@ trial seepage steps of the cavity balance, the solid's solves and the form
 compilation (issue 14: "3D pumped seepage cost", profile first).  Each
 cavity balance is one Newton on the joints and the cavity pressure together;
 trial seepage steps appear only where that Newton failed and the secant
-took over.
+took over.  It also shows what an interface event costs: the joints' network
+rebuilt, MUMPS's back-substitutions and numeric refactorisations of the
+solid, and the low-rank (Woodbury) columns.
 
     make run CMD="python3 benchmarks/seepage_profile.py --seconds 600"
+    make run CMD="python3 benchmarks/seepage_profile.py --resolution default --duration 38 \
+        --joint-pressure '30 MPa' --landing tolerance --seconds 1800"
 """
 
 from __future__ import annotations
@@ -65,13 +69,22 @@ def main() -> None:
     ap.add_argument("--resolution", default="coarse")
     ap.add_argument("--duration", type=float, default=4.0, help="pumping time (s)")
     ap.add_argument("--bulk-modulus", default="2.2 GPa")
+    ap.add_argument(
+        "--joint-pressure", default=None, help="joints start full at this pressure, e.g. '30 MPa'"
+    )
+    ap.add_argument("--landing", default=None, help="solver.break_landing (exact, step, tolerance)")
     args = ap.parse_args()
+    overrides = {}
+    if args.joint_pressure is not None:
+        overrides["injection.joint_pressure"] = args.joint_pressure
+    if args.landing is not None:
+        overrides["solver.break_landing"] = args.landing
     if MPI.COMM_WORLD.size != 1:
         raise SystemExit("one rank: the profile is of one process")
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "no2_seepage.toml"
         path.write_text(_scene_text(args.duration, args.bulk_modulus))
-        scene = load_scene(path, args.resolution)
+        scene = load_scene(path, args.resolution, overrides=overrides)
         signal.signal(signal.SIGALRM, _time_up)
         signal.alarm(args.seconds)
         prof = cProfile.Profile()
@@ -94,6 +107,10 @@ def main() -> None:
         ("seepage Newton matrices set", r"seepage\.py:\d+\(_factorise\)"),
         ("seepage network solves (LU inside)", r"seepage\.py:\d+\(_solve\)"),
         ("solid solves", r"cdem\.py:\d+\(solve\)"),
+        ("MUMPS back-substitutions (all solvers)", r"'matSolve' of"),
+        ("KSP set-ups (MUMPS factorisations, all)", r"'setUp' of 'petsc4py\.PETSc\.KSP'"),
+        ("low-rank columns of the solid's events", r"lowrank\.py:\d+\(add\)"),
+        ("joint network rebuilt after breaks", r"pumping\.py:\d+\(_network\)"),
         ("debris search (loose blocks)", r"fragments\.py:\d+\(debris\)"),
         ("form compilation (ffcx)", r"jit\.py:\d+\(ffcx_jit\)"),
     ]
