@@ -563,3 +563,24 @@ def test_a_load_and_its_unit_solved_together_are_those_solved_one_by_one(mode):
         scale = MPI.COMM_WORLD.allreduce(float(np.abs(expected).max()), op=MPI.MAX)
         gap = MPI.COMM_WORLD.allreduce(float(np.abs(solid.u.x.array - expected).max()), op=MPI.MAX)
         assert 0.0 < scale and gap <= 1e-12 * scale
+
+
+def test_a_load_under_zero_displacement_conditions_is_the_lifted_one():
+    """Zero Dirichlet values lift nothing: the load skips the lifting and is the same vector."""
+    import dolfinx.fem.petsc
+    from petsc4py import PETSc
+
+    from hfcdem.solid.cdem import _homogeneous
+
+    solid = sneddon_solid(A / 5)
+    a_form, _ = solid.factorize()
+    form = solid.load_form(Loads(crack_pressure=P))
+    b = solid.assemble_load(a_form, form)
+    lifted = dolfinx.fem.petsc.assemble_vector(form)
+    dolfinx.fem.petsc.apply_lifting(lifted, [a_form], bcs=[solid.bcs])
+    lifted.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    dolfinx.fem.petsc.set_bc(lifted, solid.bcs)
+    assert np.array_equal(b.array, lifted.array)
+    assert _homogeneous(solid.bcs)
+    dofs = np.zeros(0, dtype=np.int32)
+    assert not _homogeneous([dolfinx.fem.dirichletbc(1.0, dofs, solid.V.sub(0))])
