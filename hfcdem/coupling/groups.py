@@ -25,6 +25,7 @@ from hfcdem.coupling.condense import (
 from hfcdem.coupling.fluidstate import Key, facet_keys
 from hfcdem.coupling.settings import FlowSettings
 from hfcdem.flow.network import Network, build_network
+from hfcdem.flow.seepage import network_positions
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import OPEN
@@ -53,7 +54,7 @@ def local_network(solid: CDEMSolid, cavity_vertices: np.ndarray) -> LocalNetwork
         solid.vertex_coords[owned],
         cavity_vertices,
     )
-    positions = net.positions(solid.vertex_ids[local])
+    positions = network_positions(solid, net, local)
     owned_sel = solid.owned[local]
     view = NetworkView(local, positions, owned_sel, net.size)
     contact_open = (solid.contact[local] == OPEN).astype(float)
