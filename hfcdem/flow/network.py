@@ -174,36 +174,37 @@ def _pairs(
 
 def _stars(
     all_keys: np.ndarray, all_x: np.ndarray, cavity: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Give the stars (a facet's vertices in 2D, its edges in 3D) numbers as facets meet them.
 
-    Returns each entry's star (entries facet by facet, a facet's stars in a
-    fixed local order), each star's point (its vertex or its edge's midpoint),
-    cross-length (1 in 2D, the edge's length in 3D) and whether it lies on the
-    cavity wall (every vertex of it there).
+    Returns each entry's facet and star (entries facet by facet, a facet's
+    stars in a fixed local order), each star's point (its vertex or its edge's
+    midpoint), cross-length (1 in 2D, the edge's length in 3D) and whether it
+    lies on the cavity wall (every vertex of it there).
     """
     n, nv = all_keys.shape
     local = np.array([[0], [1]]) if nv == 2 else np.array([[0, 1], [1, 2], [0, 2]])
     width = local.shape[1]
     star_keys = all_keys[:, local].reshape(-1, width)
     points = all_x[:, local].reshape(-1, width, 3)
+    e_fac = np.repeat(np.arange(n, dtype=np.int64), len(local))
     if not n:
         empty = np.zeros(0)
-        return np.zeros(0, dtype=np.int64), np.zeros((0, 3)), empty, empty.astype(bool)
+        return e_fac, e_fac.copy(), np.zeros((0, 3)), empty, empty.astype(bool)
     _, first, label = np.unique(star_keys, axis=0, return_index=True, return_inverse=True)
     met = np.argsort(first)  # the stars in the order the entries first meet them
     number = np.empty(len(met), dtype=np.int64)
     number[met] = np.arange(len(met))
     e_star = number[label.reshape(-1)]
     first_entry = first[met]
-    star_point = points[first_entry].mean(axis=1)
+    ends = points[first_entry]
+    star_point = ends.mean(axis=1)
     if nv == 2:
         cross = np.ones(len(met))
     else:
-        ends = points[first_entry]
         cross = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)
     on_wall = np.asarray(np.isin(star_keys[first_entry], cavity).all(axis=1), dtype=bool)
-    return e_star, star_point, np.asarray(cross, dtype=float), on_wall
+    return e_fac, e_star, star_point, np.asarray(cross, dtype=float), on_wall
 
 
 def build_network(
@@ -239,9 +240,7 @@ def build_network(
 
     cavity = np.unique(gather_rows(comm, np.asarray(cavity_vertices, np.int64)))
     centroid = all_x.mean(axis=1) if len(all_x) else np.zeros((0, 3))
-    e_star, star_point, star_cross, star_cavity = _stars(all_keys, all_x, cavity)
-    per_facet = len(e_star) // max(len(all_keys), 1)  # stars of a facet
-    e_fac = np.repeat(np.arange(len(all_keys), dtype=np.int64), per_facet)
+    e_fac, e_star, star_point, star_cross, star_cavity = _stars(all_keys, all_x, cavity)
     dist = np.maximum(np.linalg.norm(centroid[e_fac] - star_point[e_star], axis=1), 1e-300)
     pa, pb, ps, touches = _pairs(e_star, e_fac, star_cavity, len(all_keys))
     net = Network(
