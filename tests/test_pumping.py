@@ -20,7 +20,12 @@ from mpi4py import MPI
 import hfcdem.coupling.pumping as pumping_module
 from hfcdem import analytic
 from hfcdem.config.materials import Fluid
-from hfcdem.coupling.penetration import CavityPumping
+from hfcdem.coupling.penetration import (
+    CavityPumping,
+    excavation_loads,
+    ramp_breakdown,
+    settle_excavation,
+)
 from hfcdem.coupling.pumping import (
     BREAKDOWN_DROP,
     cavity_joint_coupling,
@@ -138,6 +143,38 @@ def test_pumping_with_joints_full_at_a_pore_pressure_breaks_at_the_wet_first_bre
     pressure, saturation = starts[0]
     assert np.all(saturation == 1.0) and np.allclose(pressure, p0, rtol=1e-12)
     assert run.max_mass_error < 1e-9
+
+
+def test_what_the_excavation_breaks_is_settled_under_the_loads_the_run_starts_from(plate):
+    """Joints full at 10.5 MPa round a cavity at 8 MPa: the excavation breaks wall facets.
+
+    Those joined to the cavity hold its pressure; the others keep the pore
+    fluid on their faces; intact joints hold it inside.  The ramp's and the
+    pumped run's settles then break the same facets, and both first breaks
+    agree (measured 6.9e-8 apart).  Before (2026-12-06) the ramp's settle took
+    the pore fluid off every broken face and ran through the zone (950 facets),
+    and the pumped run's gave its cracks the cavity pressure only after its
+    settle (2 facets, then a first break at 8.81 MPa).
+    """
+    pc, p0 = 8e6, 10.5e6
+    pumping = CavityPumping(Q, 40.0, steps=100, initial_pressure=pc, joint_pressure=p0)
+    solid = _solid(plate)
+    loads = excavation_loads(solid, WALL, pc, p0)
+    broken = settle_excavation(solid, loads)
+    assert broken == 4  # measured
+    settled = loads()
+    crack = np.asarray(settled.crack_pressure)
+    intact = solid.state == FacetState.INTACT
+    joined = ~intact & (crack == pc)
+    assert solid.comm.allreduce(int(np.count_nonzero(joined & solid.owned)), op=MPI.SUM) > 0
+    assert np.all(np.isin(crack[~intact], (pc, p0))) and np.all(crack[intact] == 0.0)
+    assert np.all(np.asarray(settled.joint_pressure)[intact] == p0)
+    ramp = ramp_breakdown(_solid(plate), WALL, Fluid(viscosity=1.0), 1e-9, pumping)
+    run = pump_with_seepage(_solid(plate), WALL, Fluid(viscosity=1.0), 1e-9, pumping)
+    assert ramp.initial_failures == run.initial_failures == broken
+    assert ramp.stopped is None and run.stopped is None
+    assert ramp.pressure == pytest.approx(run.first_pressure, rel=1e-6)
+    assert pc < ramp.pressure < p0
     with pytest.raises(ValueError, match="joint_pressure"):
         CavityPumping(Q, 40.0, joint_pressure=-1.0)
 

@@ -65,6 +65,17 @@ def local_network(solid: CDEMSolid, cavity_vertices: np.ndarray) -> LocalNetwork
     return LocalNetwork(net, view, facet_keys(net.keys), is_open, joined)
 
 
+def joined_cracks(solid: CDEMSolid, cavity_vertices: np.ndarray) -> np.ndarray:
+    """Per local facet: broken and joined to the cavity through broken facets (collective).
+
+    The faces of debris are joined: the cavity's fluid surrounds it.
+    """
+    local = local_network(solid, cavity_vertices)
+    out = np.zeros(solid.num_facets, dtype=bool)
+    out[local.view.facets] = local.joined[local.view.positions]
+    return out
+
+
 def pressure_groups(wet: np.ndarray, uniform: bool) -> np.ndarray:
     """Pressure group of each facet: 0 the cavity, -1 dry, else 1, 2, .. in order.
 
@@ -173,6 +184,7 @@ __all__ = [
     "LocalNetwork",
     "condense_network",
     "group_count",
+    "joined_cracks",
     "local_network",
     "near_fluid",
     "network_volumes",

@@ -33,7 +33,9 @@ from mpi4py import MPI
 from hfcdem.config.materials import Fluid
 from hfcdem.coupling.condense import cavity_vertices, mesh_cavity_volume
 from hfcdem.coupling.events import facets_to_break, switch_contacts
+from hfcdem.coupling.groups import joined_cracks
 from hfcdem.flow.apertures import JointAperture, network_apertures
+from hfcdem.flow.network import gather_rows
 from hfcdem.flow.seepage import JointSeepage, joint_network, network_positions
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.equilibrium import critical_factor
@@ -236,14 +238,9 @@ def ramp_breakdown(
     for name in cavity:
         solid.tmesh.facet_tag(name)  # clear error for unknown groups
     solid.free_interfaces(np.ones(solid.num_facets, dtype=bool))  # (0 in the full mode)
-    joints = np.flatnonzero((solid.state == FacetState.INTACT) & ~solid.is_crack)
     # the state the ramp starts from (excavated, cavity at P0): what fails there, e.g. on
     # stress noise where the wall mesh changes, breaks first and is not the breakdown
-    p0 = joints_at_start(ramp) or 0.0
-    start = Loads(
-        cavity={name: ramp.initial_pressure for name in cavity},
-        joint_pressure=np.where(np.isin(np.arange(solid.num_facets), joints), p0, 0.0),
-    )
+    start = excavation_loads(solid, cavity, ramp.initial_pressure, joints_at_start(ramp))
     try:
         initial_failures = settle_excavation(solid, start)
     except CascadeStopped as stop:  # the excavated rock does not stand: no ramp to run
@@ -298,8 +295,14 @@ class _Drive:
         ramp: PressureRamp | CavityPumping,
     ) -> None:
         self.solid, self.cavity, self.ramp = solid, cavity, ramp
-        self.joints = np.flatnonzero((solid.state == FacetState.INTACT) & ~solid.is_crack)
-        self.net = joint_network(solid, cavity_vertices(solid, cavity, None), self.joints)
+        # as in a pumped run: what the excavation broke and joined to the cavity takes its
+        # pressure; every other interface of the zone, broken ones too, is a joint
+        walls = cavity_vertices(solid, cavity, None)
+        self.cracks = joined_cracks(solid, walls) & ~solid.is_crack
+        self.joints = np.flatnonzero(~solid.is_crack & ~self.cracks)
+        mine = self.cracks & solid.owned
+        boundary = np.union1d(walls, gather_rows(solid.comm, solid.vertex_ids[mine].reshape(-1)))
+        self.net = joint_network(solid, boundary, self.joints)
         self.local = network_positions(solid, self.net, self.joints)
         void = None
         if isinstance(aperture, JointAperture):
@@ -335,7 +338,14 @@ class _Drive:
     def loads(self, pw: float, pj: np.ndarray, in_situ: float = 1.0) -> Loads:
         """Return the loads of the cavity at ``pw`` and the joints at ``pj`` (network order)."""
         cav = {name: pw for name in self.cavity}
-        return Loads(cavity=cav, joint_pressure=self.per_facet(pj), in_situ_factor=in_situ)
+        pf = self.per_facet(pj)
+        intact = self.solid.state == FacetState.INTACT
+        return Loads(
+            cavity=cav,
+            crack_pressure=np.where(self.cracks, pw, np.where(intact, 0.0, pf)),
+            joint_pressure=np.where(intact, pf, 0.0),
+            in_situ_factor=in_situ,
+        )
 
     def advance(self, n: int, pw: float) -> float:
         """Step the seepage to the end of step ``n``; return the cavity pressure there."""
@@ -382,25 +392,60 @@ class _Drive:
         )
 
 
-def settle_excavation(solid: CDEMSolid, loads: Loads, max_iterations: int = 200) -> int:
+def excavation_loads(
+    solid: CDEMSolid, cavity: Sequence[str], pressure: float, joint_pressure: float | None
+) -> Callable[[], Loads]:
+    """Return the excavated state's loads at the solid's states then (collective).
+
+    The cavity holds ``pressure``, and so do the broken facets joined to it
+    through broken facets (its fluid fills them).  Joints full at
+    ``joint_pressure`` (None: dry) hold it inside the intact ones and on the
+    faces of the other broken ones (the pore fluid stays in them).  A ramp and
+    a pumped run start from these loads, so what the excavation breaks is
+    settled under them.
+    """
+    walls = cavity_vertices(solid, cavity, None)
+    wet = 0.0 if joint_pressure is None else joint_pressure
+
+    def loads() -> Loads:
+        joined = joined_cracks(solid, walls) & ~solid.is_crack
+        intact = solid.state == FacetState.INTACT
+        pj = np.where(solid.is_crack, 0.0, wet)
+        return Loads(
+            cavity={name: pressure for name in cavity},
+            crack_pressure=np.where(joined, pressure, np.where(intact, 0.0, pj)),
+            joint_pressure=np.where(intact, pj, 0.0),
+        )
+
+    return loads
+
+
+def settle_excavation(
+    solid: CDEMSolid, loads: Loads | Callable[[], Loads], max_iterations: int = 200
+) -> int:
     """Break what ``loads`` over-stress, switching contacts, until nothing changes.
 
-    As the coupled step does (:func:`hfcdem.coupling.events.switch_contacts`):
-    after one round of contact switches since the last break, faces may only
-    close, which ends the chatter of dry broken faces at the excavated wall.
-    Returns the global number broken; :class:`CascadeStopped` if it does not settle.
+    ``loads``: fixed, or a function of the solid's states (e.g.
+    :func:`excavation_loads`, where a break joined to the cavity takes its
+    pressure), called after every change.  As the coupled step does
+    (:func:`hfcdem.coupling.events.switch_contacts`): after one round of contact
+    switches since the last break, faces may only close, which ends the chatter
+    of dry broken faces at the excavated wall.  Returns the global number
+    broken; :class:`CascadeStopped` if it does not settle.
     """
+    at = loads if callable(loads) else (lambda: loads)
     broken, rounds = 0, 0
     for _ in range(max_iterations):
-        solid.solve(loads)
-        ratio, mode = solid.overstress(loads)
+        current = at()
+        solid.solve(current)
+        ratio, mode = solid.overstress(current)
         chosen = facets_to_break(solid, ratio, None)
         count = int(solid.comm.allreduce(len(chosen), op=MPI.SUM))
         if count:
             solid.break_facets(chosen, mode[chosen], 0.0)
             broken, rounds = broken + count, 0
             continue
-        if switch_contacts(solid, loads, only_closing=rounds >= 1) == 0:
+        if switch_contacts(solid, current, only_closing=rounds >= 1) == 0:
             return broken
         rounds += 1
     raise CascadeStopped(0.0, broken, max_iterations)
@@ -511,6 +556,7 @@ __all__ = [
     "CavityPumping",
     "PressureRamp",
     "RampBreakdown",
+    "excavation_loads",
     "illinois_root",
     "joints_at_start",
     "ramp_breakdown",

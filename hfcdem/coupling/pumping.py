@@ -62,8 +62,13 @@ from hfcdem.coupling.events import (
     release_debris,
     switch_contacts,
 )
-from hfcdem.coupling.groups import local_network
-from hfcdem.coupling.penetration import CavityPumping, illinois_root, settle_excavation
+from hfcdem.coupling.groups import joined_cracks
+from hfcdem.coupling.penetration import (
+    CavityPumping,
+    excavation_loads,
+    illinois_root,
+    settle_excavation,
+)
 from hfcdem.coupling.stepping import StepController
 from hfcdem.flow.apertures import JointAperture, network_apertures
 from hfcdem.flow.network import Network, gather_rows
@@ -240,7 +245,8 @@ def pump_with_seepage(
         solid.tmesh.facet_tag(name)  # clear error for unknown groups
     solid.free_interfaces(np.ones(solid.num_facets, dtype=bool))  # (0 in the full mode)
     try:
-        initial_failures = settle_excavation(solid, _start_loads(solid, cavity, pumping))
+        start = excavation_loads(solid, cavity, pumping.initial_pressure, pumping.joint_pressure)
+        initial_failures = settle_excavation(solid, start)
     except CascadeStopped as stop:
         why = f"the excavated rock fails before pumping: {stop}"
         return _stopped_before_pumping(pumping, stop.broken, why)
@@ -257,20 +263,6 @@ def pump_with_seepage(
         )
     finally:
         run.seep.destroy()
-
-
-def _start_loads(solid: CDEMSolid, cavity: Sequence[str], pumping: CavityPumping) -> Loads:
-    """Return the excavated state's loads: the cavity at its start pressure, wet joints at theirs.
-
-    Wet joints load every interface of the zone, inside the intact ones and on
-    the faces of those that break as the excavation settles (the pore fluid
-    stays in them).
-    """
-    cav = {name: pumping.initial_pressure for name in cavity}
-    if pumping.joint_pressure is None:
-        return Loads(cavity=cav)
-    pj = np.full(solid.num_facets, pumping.joint_pressure)
-    return Loads(cavity=cav, crack_pressure=pj, joint_pressure=pj)
 
 
 def _stopped_before_pumping(
@@ -380,14 +372,8 @@ class _PumpedCavity:
         )
 
     def _joined_cracks(self) -> np.ndarray:
-        """Per local facet: broken and joined to the cavity through broken facets.
-
-        The faces of debris are joined: the cavity's fluid surrounds it.
-        """
-        local = local_network(self.solid, self.walls)
-        out = np.zeros(self.solid.num_facets, dtype=bool)
-        out[local.view.facets] = local.joined[local.view.positions]
-        return out
+        """Per local facet: broken and joined to the cavity (:func:`joined_cracks`)."""
+        return joined_cracks(self.solid, self.walls)
 
     def release_debris(self, t: float) -> int:
         """Hold open the faces of blocks newly cut loose from the walls; their count.
