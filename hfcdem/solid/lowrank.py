@@ -11,8 +11,9 @@ change in it.  With ``Z = K0^-1 E`` and ``S = E^T Z``,
 
 so the factor of ``K0`` serves the solves after any number of events: an
 event costs the new columns of ``Z`` (one MUMPS solve with several right-hand
-sides) instead of a numeric refactorisation, and a solve costs a second
-back-substitution (one step of iterative refinement) and ``n x r`` products.
+sides) instead of a numeric refactorisation, and a solve costs ``n x r``
+products and, where ``I + D S`` is ill-conditioned, a second back-substitution
+(one step of iterative refinement).
 A change is compressed to its range (an eigen-decomposition of its dense
 block) before it adds columns, and a change inside the range already held (a
 contact switch of a facet that broke since the factorisation) adds none: a
@@ -54,6 +55,11 @@ _LEAST_RANK_SHARE = 1 / 3
 # a direction of the change's range (unit length) with less than this outside the basis
 # held lies in it (a contact switch of a facet broken since the factorisation)
 _OUTSIDE_TOLERANCE = 1e-10
+# the corrected solve is refined once where I + D S is conditioned worse than this: the
+# correction's own error is about cond(I + D S) 1.5e-16 of the solution (measured: 9.4e-13
+# at 6.1e3), so 1.5e-13 at most without refinement, below the 3e-13 of a pumped run's
+# volume balance
+_REFINE_CONDITION = 1e3
 
 
 class LowRankCorrection:
@@ -77,6 +83,7 @@ class LowRankCorrection:
         self._Z = np.zeros((self.hi - self.lo, 0))
         self.D = np.zeros((0, 0))
         self.M = np.zeros((0, 0))  # I + D S
+        self.condition = 1.0  # of M (2-norm)
         self.refused = ""  # why the last refused change was: "cap" or "condition"
 
     @property
@@ -169,10 +176,11 @@ class LowRankCorrection:
         # det K = det K0 det M: a near-singular M is a near-singular K (a block held by
         # residual springs only), whose solution the compression's round-off (about 1e-16
         # of the change) would swamp; the caller refactorises it exactly instead
-        if np.linalg.cond(M) > _MAX_CONDITION:
+        condition = float(np.linalg.cond(M))
+        if condition > _MAX_CONDITION:
             self.refused = "condition"
             return False
-        self.rows, self.E, self.D, self.M = rows_all, E, D, M
+        self.rows, self.E, self.D, self.M, self.condition = rows_all, E, D, M, condition
         return True
 
     def correct(self, y: np.ndarray) -> None:
@@ -184,19 +192,26 @@ class LowRankCorrection:
 
 
 class _CorrectedPC:
-    """Python PC context: the factor's solve and the Woodbury correction, refined.
+    """Python PC context: the factor's solve and the Woodbury correction, refined if needed.
 
-    The correction's own round-off grows with the change (a broken facet drops a
-    penalty stiffness of ``alpha E / h``): 1e-12 of the solution on a small
-    block, where a pumped run's volume balance needs 3e-13.  One step of
-    iterative refinement on the changed matrix (``operator``) takes it to about
-    1e-13 on the small block, where more steps gain nothing (measured: the
-    conditioning's limit, a direct solve's own).
+    The correction's own round-off grows with the conditioning of ``I + D S``
+    (a change large against the stiffness it changes: a block left held by
+    little more than residual springs): 1e-12 of the solution on a small block,
+    where a pumped run's volume balance needs 3e-13.  One step of iterative
+    refinement on the changed matrix (``operator``) takes it to about 1e-13
+    there, where more steps gain nothing (measured: the conditioning's limit, a
+    direct solve's own).  Below ``_REFINE_CONDITION`` the step is skipped: on
+    No. 2 (cond 4-126) it moved the solution by up to 6e-7 of it, independently of
+    the condition, in the directions the factor of ``K0`` itself leaves
+    uncertain, and the residual not at all (1e-17 of ``|K| |u|`` before and after),
+    so it cost a back-substitution for nothing (benchmarks/README.md).
+    ``refinements`` counts the steps taken.
     """
 
     def __init__(self, correction: LowRankCorrection, operator: PETSc.Mat) -> None:
         self.correction = correction
         self.operator = operator
+        self.refinements = 0
 
     def _times(self, Y: np.ndarray) -> np.ndarray:
         """``K Y`` for this rank's rows ``Y``."""
@@ -213,8 +228,9 @@ class _CorrectedPC:
         Y = solve_columns(corr.factor, B)
         check_ksp(corr.factor, "CDEM solve on the kept factor")
         corr.correct(Y)
-        if corr.rank == 0:
+        if corr.rank == 0 or corr.condition <= _REFINE_CONDITION:
             return Y
+        self.refinements += 1
         Z = solve_columns(corr.factor, B - self._times(Y))
         corr.correct(Z)
         return Y + Z
