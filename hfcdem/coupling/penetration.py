@@ -337,14 +337,8 @@ class _Drive:
 
     def loads(self, pw: float, pj: np.ndarray, in_situ: float = 1.0) -> Loads:
         """Return the loads of the cavity at ``pw`` and the joints at ``pj`` (network order)."""
-        cav = {name: pw for name in self.cavity}
-        pf = self.per_facet(pj)
-        intact = self.solid.state == FacetState.INTACT
-        return Loads(
-            cavity=cav,
-            crack_pressure=np.where(self.cracks, pw, np.where(intact, 0.0, pf)),
-            joint_pressure=np.where(intact, pf, 0.0),
-            in_situ_factor=in_situ,
+        return cavity_fluid_loads(
+            self.solid, self.cavity, pw, self.cracks, self.per_facet(pj), in_situ
         )
 
     def advance(self, n: int, pw: float) -> float:
@@ -392,6 +386,30 @@ class _Drive:
         )
 
 
+def cavity_fluid_loads(
+    solid: CDEMSolid,
+    cavity: Sequence[str],
+    pressure: float,
+    joined: np.ndarray,
+    fluid: np.ndarray,
+    in_situ: float = 1.0,
+) -> Loads:
+    """Return the loads of a cavity at ``pressure`` and of the fluid in the zone's interfaces.
+
+    The broken facets ``joined`` to the cavity (a mask per local facet) hold its
+    pressure; ``fluid`` (per local facet) loads the inside of the intact
+    interfaces and the faces of the other broken ones.  The one rule of the
+    settle, the ramp and the pumped run.
+    """
+    intact = solid.state == FacetState.INTACT
+    return Loads(
+        cavity={name: pressure for name in cavity},
+        crack_pressure=np.where(joined, pressure, np.where(intact, 0.0, fluid)),
+        joint_pressure=np.where(intact, fluid, 0.0),
+        in_situ_factor=in_situ,
+    )
+
+
 def excavation_loads(
     solid: CDEMSolid, cavity: Sequence[str], pressure: float, joint_pressure: float | None
 ) -> Callable[[], Loads]:
@@ -409,13 +427,8 @@ def excavation_loads(
 
     def loads() -> Loads:
         joined = joined_cracks(solid, walls) & ~solid.is_crack
-        intact = solid.state == FacetState.INTACT
-        pj = np.where(solid.is_crack, 0.0, wet)
-        return Loads(
-            cavity={name: pressure for name in cavity},
-            crack_pressure=np.where(joined, pressure, np.where(intact, 0.0, pj)),
-            joint_pressure=np.where(intact, pj, 0.0),
-        )
+        fluid = np.where(solid.is_crack, 0.0, wet)
+        return cavity_fluid_loads(solid, cavity, pressure, joined, fluid)
 
     return loads
 
@@ -556,6 +569,7 @@ __all__ = [
     "CavityPumping",
     "PressureRamp",
     "RampBreakdown",
+    "cavity_fluid_loads",
     "excavation_loads",
     "illinois_root",
     "joints_at_start",

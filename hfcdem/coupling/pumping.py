@@ -65,6 +65,7 @@ from hfcdem.coupling.events import (
 from hfcdem.coupling.groups import joined_cracks
 from hfcdem.coupling.penetration import (
     CavityPumping,
+    cavity_fluid_loads,
     excavation_loads,
     illinois_root,
     settle_excavation,
@@ -450,13 +451,8 @@ class _PumpedCavity:
 
     def loads(self, p: float, pj: np.ndarray, in_situ: float = 1.0) -> Loads:
         """Cavity and joined cracks at ``p``; the network's pressures ``pj`` elsewhere."""
-        pf = self.per_facet(pj)
-        intact = self.solid.state == FacetState.INTACT
-        return Loads(
-            cavity={name: p for name in self.cavity},
-            crack_pressure=np.where(self.cracks, p, np.where(intact, 0.0, pf)),
-            joint_pressure=np.where(intact, pf, 0.0),
-            in_situ_factor=in_situ,
+        return cavity_fluid_loads(
+            self.solid, self.cavity, p, self.cracks, self.per_facet(pj), in_situ
         )
 
     def unit_loads(self) -> Loads:
