@@ -103,11 +103,12 @@ def _pressure(summary: dict, key: str) -> str:
 def shared_breakdown(path: Path, initial_pressure: float) -> str:
     """The breakdown of a run's ``history.csv`` by the uniform and viscous rungs' rule (MPa).
 
-    A pumped seepage run takes the first peak followed by a 1 % fall once
-    something broke (:data:`hfcdem.coupling.pumping.BREAKDOWN_DROP`); the other
-    rungs the highest peak followed by a fall of 5 % of the rise
-    (:func:`~hfcdem.workflows.breakdown.detect_breakdown`).  This column puts
-    every rung under the second, from the run's start.
+    Every rung takes the highest peak followed by a sustained fall of 5 % of
+    the rise (:func:`~hfcdem.workflows.breakdown.detect_breakdown`; a pumped
+    seepage run took the first peak followed by a 1 % fall until 2026-12-06).
+    A pumped seepage run reads it on each step's highest pressure and only
+    after its first break; this column reads every rung's step-end pressures
+    from the run's start.
     """
     if not path.exists():
         return "-"

@@ -14,6 +14,8 @@ def test_peak_then_sustained_drop():
     assert found.pressure == pytest.approx(60.0)
     assert found.time == pytest.approx(6.0)
     assert found.confirmed_at > found.time
+    assert found.drop == pytest.approx(80.0)  # to the last record's -20
+    assert found.relative_drop == pytest.approx(80.0 / 60.0)
 
 
 def test_rising_or_wobbling_history_has_no_breakdown():
@@ -67,6 +69,8 @@ def test_a_run_cut_short_by_the_validity_limit_says_its_peak_is_a_lower_bound():
     r = [0.0, 2.4, 4.61, 3.2, 3.3, 3.4, 5.0, 7.5, 10.12, 9.9]
     found = detect_breakdown(range(len(r)), r)
     assert found is not None and found.pressure == 4.61
+    # its depth stops where the pressure regains the peak: the dip to 3.2, not the end
+    assert found.drop == pytest.approx(4.61 - 3.2)
     note = breakdown_note(r, found, False, validity_limit=True)
     assert note is not None and "at least the highest pressure" in note
     assert breakdown_note(r, found, False) is None  # at the planned end: the drop stands
@@ -83,6 +87,7 @@ def test_a_lower_peak_the_pressure_regains_is_not_the_breakdown():
     assert found is not None
     assert found.pressure == pytest.approx(6.23e0) and found.time == 13.18
     assert found.confirmed_at == 16.18
+    assert found.drop == pytest.approx(6.23 - 3.2)
     # cut before the second peak drops, the first dip alone is a (confirmed) breakdown
     early = detect_breakdown(t[:8], p[:8])
     assert early is not None and early.pressure == pytest.approx(1.576)

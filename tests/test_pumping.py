@@ -27,7 +27,6 @@ from hfcdem.coupling.penetration import (
     settle_excavation,
 )
 from hfcdem.coupling.pumping import (
-    BREAKDOWN_DROP,
     cavity_joint_coupling,
     facet_openings,
     pump_with_seepage,
@@ -70,7 +69,9 @@ def test_sealed_cavity_breaks_down_at_the_dry_first_break(plate):
     after = t >= run.breakdown_time  # the step that breaks ends with the crack open
     # the crack joined to the cavity takes fluid: the pressure falls, then rises again as
     # the crack stops at the edge of the fracturable zone
-    assert p[after].min() < run.breakdown * (1.0 - BREAKDOWN_DROP)
+    # a drop of the common rule's size confirmed it, and the depth is the one recorded
+    assert run.breakdown - p[after].min() >= 0.05 * (run.breakdown - p[0])
+    assert run.breakdown_drop == pytest.approx(run.breakdown - p[after].min(), rel=1e-12)
     assert crack[~after].max() < 1e-12 < crack[after].min()
     assert tensile[-1] >= 10 and run.shear == 0
     assert run.max_mass_error < 1e-9
@@ -248,10 +249,13 @@ def test_a_block_loose_before_pumping_ends_the_run_at_the_validity_limit(plate, 
     assert run.first_pressure is None and run.breakdown is None
 
 
-def test_faster_pumping_breaks_down_higher(plate):
+def test_faster_pumping_breaks_higher(plate):
     slow, fast = (_pump(plate, 5e-6, rate) for rate in (Q, 10 * Q))
-    assert slow.breakdown is not None and fast.breakdown is not None
-    assert slow.breakdown < fast.breakdown
+    # fast: the wall breaks down at its first break (the pressure falls 6 % of its rise
+    # and stays down); slow: the crack grows stably from a lower first break, the
+    # pressure levelling off through dips of at most 3 % of the rise and rising to the end
+    assert fast.breakdown == fast.first_pressure and fast.breakdown_drop > 0.05 * fast.breakdown
+    assert slow.breakdown is None and slow.peak_cut_off
     # slow: the joints at the wall hold fluid when it breaks, and it breaks below the dry
     # 14.43 MPa; fast: they are nearly dry
     assert slow.first_pressure < 0.75 * fast.first_pressure
@@ -353,7 +357,7 @@ def test_a_pressure_that_only_falls_has_no_breakdown(plate):
     fluid = Fluid(viscosity=1e-3)
     run = pump_with_seepage(_solid(plate), WALL, fluid, 20e-6, pumping)
     p = np.array(run.history)[:, 1]
-    assert p[-1] < 5e6 * (1.0 - BREAKDOWN_DROP)  # it fell by more than the breakdown drop
+    assert p[-1] < 5e6 * 0.99  # it fell, from the start: no rise, so no breakdown
     assert run.breakdown is None and not run.peak_cut_off
     assert run.peak_time == 0.0 and run.peak_pressure == pytest.approx(5e6)
 
@@ -432,11 +436,16 @@ def test_the_balance_follows_the_joints_so_the_solid_is_solved_once_per_step(pla
     Without the reciprocal coupling every step was balanced again on the
     measured volume (357 re-balances, 552 solid solves in 111 steps, mass
     error 1.7e-10); with it 3 re-balances (joints that start holding
-    pressure within a step), 198 solves, and the same breakdown to 1e-11.
+    pressure within a step), 198 solves, and the same pressures to 1e-11
+    (measured on the 13.2975 MPa tooth that the 1 % rule of before 2026-12-06
+    took for the breakdown).  The crack grows stably: the pressure rises to
+    the end through small drops, so no breakdown.
     """
     run = _pump(plate, 5e-6)
     assert run.stopped is None and run.tensile == 22
-    assert run.breakdown == pytest.approx(13.2975119458e6, rel=1e-9)  # without: 13.29751194585
+    assert run.first_pressure == pytest.approx(9.790647953609e6, rel=1e-9)
+    assert run.peak_pressure == pytest.approx(16.802043745256e6, rel=1e-9)
+    assert run.breakdown is None and run.peak_time == pytest.approx(40.0)
     assert run.rebalances <= 3
     assert run.solid_solves <= 200
     assert run.max_mass_error < 1e-12
@@ -545,5 +554,7 @@ def test_a_reduced_solid_pumps_with_its_whole_zone_free(plate):
     free = solid.comm.allreduce(bool(np.all(solid.band.free)), op=MPI.LAND)
     assert free and before < solid.num_dofs  # the zone freed: more unknowns than the band had
     assert run.stopped is None and run.max_mass_error < 1e-12
-    # the full solid's 13.2975 MPa (test above): 9.8e-5 higher (4,274 unknowns, full 6,264)
-    assert run.breakdown == pytest.approx(13.2975119458e6, rel=2e-4)
+    # the full solid's first break, 9.7906 MPa (test above): 2.0e-4 higher (4,274 unknowns,
+    # full 6,264); its highest pressure 3.0e-3 higher
+    assert run.first_pressure == pytest.approx(9.790647953609e6, rel=3e-4)
+    assert run.peak_pressure == pytest.approx(16.802043745256e6, rel=4e-3)

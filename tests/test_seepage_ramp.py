@@ -152,10 +152,12 @@ def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):
     assert summary["kind"] == "seepage_pumping"
     assert summary["pumping_rate_m3_per_s"] == pytest.approx(2e-6)
     # the first break between every joint at the cavity pressure (8.83 MPa) and dry joints
-    # (14.43 MPa); the crack then grows through the wetter joints as the pressure rises
+    # (14.43 MPa); the crack then grows stably through the wetter joints as the pressure
+    # rises, through drops of at most 2 % (measured), so no sustained drop: no breakdown
     assert 8.9 < summary["first_crack_pressure_MPa"] < 14.43
-    assert summary["first_crack_pressure_MPa"] < summary["breakdown_pressure_MPa"]
-    assert summary["breakdown_time_s"] < 20.0 and not summary["peak_cut_off"]
+    assert summary["first_crack_pressure_MPa"] < 0.75 * summary["peak_pressure_MPa"]
+    assert summary["breakdown_pressure_MPa"] is None and summary["peak_cut_off"]
+    assert summary["breakdown_note"].startswith("no sustained drop after a break confirmed")
     assert summary["max_mass_error"] < 1e-9
     rows = (shared_tmp_path / "pumped" / "history.csv").read_text().splitlines()
     assert rows[0].startswith("time_s,cavity_pressure_Pa") and len(rows) > 200
@@ -251,13 +253,13 @@ def test_breaks_at_the_end_of_a_step_come_at_most_a_step_late(shared_tmp_path):
     dt = scene.physics.solver.time_step  # 0.1 s, 200 steps
     assert step["steps"] == 200 < exact["steps"]  # 208: eight were shortened
     assert step["solid_solves"] < exact["solid_solves"]
-    for key in ("first_crack", "breakdown"):
+    for key in ("first_crack", "peak"):
         late = step[f"{key}_time_s"] - exact[f"{key}_time_s"]
         assert 0.0 <= late <= dt * (1.0 + 1e-9), key
-    # measured: the first break 0.70 % and the breakdown 0.14 % higher, the same cracks
+    # measured: the first break 0.70 % and the highest pressure 0.14 % higher, the same cracks
     first = step["first_crack_pressure_MPa"] / exact["first_crack_pressure_MPa"] - 1.0
     assert 0.0 <= first < 0.01
-    assert step["breakdown_pressure_MPa"] == pytest.approx(exact["breakdown_pressure_MPa"], 3e-3)
+    assert step["peak_pressure_MPa"] == pytest.approx(exact["peak_pressure_MPa"], 3e-3)
     assert step["tensile_failures"] == exact["tensile_failures"]
     assert step["max_mass_error"] < 1e-9
     for landing in ("step", "tolerance"):
@@ -270,9 +272,9 @@ def test_breaks_at_the_end_of_a_step_come_at_most_a_step_late(shared_tmp_path):
     first = tolerance["first_crack_pressure_MPa"] / exact["first_crack_pressure_MPa"] - 1.0
     assert abs(first) < 1e-4  # measured 1.0e-5
     assert tolerance["first_crack_time_s"] == pytest.approx(exact["first_crack_time_s"], 1e-4)
-    # the breaks not landed move the rest of the run: measured +0.78 %, two more tensile
-    breakdown = tolerance["breakdown_pressure_MPa"] / exact["breakdown_pressure_MPa"] - 1.0
-    assert 0.0 <= breakdown < 0.01
+    # the breaks not landed move the rest of the run: measured +0.79 %, two more tensile
+    peak = tolerance["peak_pressure_MPa"] / exact["peak_pressure_MPa"] - 1.0
+    assert 0.0 <= peak < 0.01
     assert tolerance["max_mass_error"] < 1e-9
 
 
@@ -284,7 +286,7 @@ def test_pumped_seepage_runs_the_same_with_contact_hysteresis_or_without(shared_
         scene = load_scene(PUMPING, "coarse", overrides={"solver.contact_hysteresis": on})
         assert scene.physics.solver.contact_hysteresis is on
         runs[on] = run_scene(scene, shared_tmp_path / f"hysteresis_{on}")
-    for key in ("breakdown_pressure_MPa", "first_crack_pressure_MPa", "tensile_failures"):
+    for key in ("peak_pressure_MPa", "first_crack_pressure_MPa", "tensile_failures"):
         assert runs[True][key] == pytest.approx(runs[False][key], rel=1e-12), key
 
 
@@ -363,7 +365,7 @@ def test_a_dip_while_dry_joints_fill_and_nothing_breaks_is_no_breakdown(shared_t
 
 
 def test_a_pumped_run_cut_short_says_its_peak_is_a_lower_bound():
-    from hfcdem.coupling.pumping import BREAKDOWN_DROP, PumpingResult
+    from hfcdem.coupling.pumping import PumpingResult
     from hfcdem.workflows.seepage_ramp import pumping_note
 
     def result(**kw):
@@ -374,9 +376,8 @@ def test_a_pumped_run_cut_short_says_its_peak_is_a_lower_bound():
         )  # fmt: skip
         return PumpingResult(**{**base, **kw})
 
-    drop = f"{BREAKDOWN_DROP:.0%}"
     said = pumping_note(result())
-    assert said.startswith(f"the pressure did not fall {drop} below its peak 64.2")
+    assert said.startswith("no sustained drop after a break confirmed its peak 64.2")
     cut = pumping_note(result(validity_limit=True, stopped="a block slid out"))
     assert cut.startswith("the run ended at the model's validity limit") and "lower bound" in cut
     assert pumping_note(result(breakdown=64.2e6, breakdown_time=95.0)) is None

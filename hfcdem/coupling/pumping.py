@@ -31,13 +31,13 @@ balance in the same step, so the pressure drops as a crack joined to the
 cavity opens.  A step in which an interface would cross its envelope is
 shortened to the crossing (the loads interpolated linearly within it).
 
-The breakdown is the peak cavity pressure, counted only when the pressure
-falls below it by :data:`BREAKDOWN_DROP` before the run ends (a peak cut off
-by the end of the run is flagged, not published), when it rose above the
-starting pressure first (a pressure that only falls, the joints taking more
-than the pump delivers, has no breakdown) and when some interface has broken
-since the start (a dip while the dry joints take fluid and nothing breaks is
-not one).  The first break is
+The breakdown is found as for every coupled run
+(:func:`~hfcdem.workflows.breakdown.detect_breakdown`: the highest peak that a
+sustained drop confirms; a peak cut off by the end of the run is flagged, not
+published), on the cavity pressure with each step's highest pressure, and only
+by a drop once some interface has broken (a dip while the dry joints take fluid
+and nothing breaks is not one; a pressure that only falls, the joints taking
+more than the pump delivers, has none).  The first break is
 reported separately: in 3D it is often a shear breakout at the tunnel wall
 that takes no fluid and leaves the pressure rising.
 """
@@ -88,6 +88,7 @@ from hfcdem.solid.fragments import Fragments
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import OPEN, CascadeStopped
 from hfcdem.solvers import ValidityLimit
+from hfcdem.workflows.breakdown import detect_breakdown
 
 #: called with the time, the fluid pressure and the saturation per local facet
 Frames = Callable[[float, np.ndarray, np.ndarray], None]
@@ -108,9 +109,6 @@ COST_COLUMNS = (
     "low_rank_s",
     "wall_s",
 )
-
-#: a peak counts as the breakdown once the pressure has fallen this fraction below it
-BREAKDOWN_DROP = 0.01
 
 #: the measured cavity volume must match the balanced one to this fraction of a step's volume
 _VOLUME_TOLERANCE = 1e-8
@@ -153,9 +151,10 @@ class PumpingResult:
     ``first_pressure``, ``first_time``, ``first_mode`` (1 tensile, 2 shear),
     ``first_location``: the first interface to break during pumping (None:
     none broke); ``breakdown``, ``breakdown_time``: the peak cavity pressure
-    once the pressure has fallen below it (None: no such peak);
+    that a sustained drop confirmed (None: no such peak), and
+    ``breakdown_drop``: how far (Pa) the pressure fell after it;
     ``peak_pressure``, ``peak_time``: the highest pressure of the run, and
-    ``peak_cut_off``: it came at the end of the run (no fall after it);
+    ``peak_cut_off``: no drop confirmed a breakdown before the run ended;
     ``history`` rows: ``(time, cavity pressure, fluid in the joints, crack
     volume joined to the cavity, tensile, shear, share of joints holding
     pressure)``; ``max_mass_error``: the largest ``|pumped - held|`` over the
@@ -198,6 +197,7 @@ class PumpingResult:
     validity_limit: bool = False
     secant_balances: int = 0
     debris_cells: int = 0
+    breakdown_drop: float | None = None
     rebalances: int = 0
     solid_solves: int = 0
     factorisations: int = 0
@@ -770,9 +770,8 @@ class _PumpedCavity:
         costs: list[tuple[float, ...]] = []
         first: tuple[float, float, int, np.ndarray] | None = None
         peak, peak_time, stopped, limit = self.p, 0.0, None, False
-        breakdown: tuple[float, float] | None = None
-        # a drop with no interface broken since the start is the joints' intake
-        broken_start = sum(solid.broken_counts().values())
+        # the pressure curve the breakdown is read from: each step's highest, then its end
+        curve_t, curve_p = [0.0], [self.p]
         every = max(1, pumping.steps // 10)
         if frames is not None:
             frames(t, *self.fields())
@@ -831,15 +830,11 @@ class _PumpedCavity:
                 records(history[-1], costs[-1])
             if top > peak:
                 peak, peak_time = top, t
-            elif (
-                breakdown is None
-                and peak_time > 0.0
-                and self.p < peak * (1.0 - BREAKDOWN_DROP)
-                and counts["tensile"] + counts["shear"] > broken_start
-            ):
-                # (a fall from the starting pressure, or one while nothing breaks, is the
-                # joints' intake, not a breakdown)
-                breakdown = (peak, peak_time)
+            if top > self.p:
+                curve_t.append(t)
+                curve_p.append(top)
+            curve_t.append(t)
+            curve_p.append(self.p)
             if progress is not None:
                 for news in self.debris_news:
                     progress(news)
@@ -852,13 +847,18 @@ class _PumpedCavity:
                 )
         counts = solid.broken_counts()
         pj, sat = self.fields()
+        # a fall before the first break is the joints' intake, not a breakdown
+        breakdown = detect_breakdown(
+            curve_t, curve_p, not_before=math.inf if first is None else first[1]
+        )
         return PumpingResult(
             first_pressure=None if first is None else first[0],
             first_time=None if first is None else first[1],
             first_mode=None if first is None else int(first[2]),
             first_location=None if first is None else first[3],
-            breakdown=None if breakdown is None else breakdown[0],
-            breakdown_time=None if breakdown is None else breakdown[1],
+            breakdown=None if breakdown is None else breakdown.pressure,
+            breakdown_time=None if breakdown is None else breakdown.time,
+            breakdown_drop=None if breakdown is None else breakdown.drop,
             peak_pressure=peak,
             peak_time=peak_time,
             peak_cut_off=breakdown is None and peak_time > 0.0,
@@ -901,7 +901,6 @@ def _worst_facet(solid: CDEMSolid, ratio: np.ndarray, mode: np.ndarray) -> tuple
 
 
 __all__ = [
-    "BREAKDOWN_DROP",
     "PumpingResult",
     "cavity_joint_coupling",
     "facet_openings",

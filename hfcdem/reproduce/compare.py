@@ -367,6 +367,21 @@ def peak_cut_short(s: Mapping[str, Any]) -> str | None:
     )
 
 
+def _depth(summary: Mapping[str, Any]) -> str:
+    """How far the pressure fell after a run's breakdown, as words ("" if not recorded)."""
+    bd, drop = summary.get("breakdown_pressure_MPa"), summary.get("breakdown_drop_MPa")
+    if not bd or drop is None:  # a summary from before the depth was recorded
+        return ""
+    return f" (it fell {drop:.2f} MPa after it, {drop / bd:.1%} of the peak)"
+
+
+def _confirmation(summary: Mapping[str, Any]) -> str:
+    """Whether a drop confirmed a run's peak as its breakdown, and how deep it went."""
+    if summary.get("breakdown_pressure_MPa"):
+        return "confirmed by a drop" + _depth(summary)
+    return "highest pressure of the run, no drop"
+
+
 def lab_specimen(r: CaseResult) -> list[Comparison]:
     """Breakdown (the peak, as the paper) per azimuth against the measurements; its rise."""
     out = []
@@ -378,6 +393,7 @@ def lab_specimen(r: CaseResult) -> list[Comparison]:
         ours.append(peak)
         bd = row.get("breakdown_pressure_MPa")
         drop = f"first confirmed drop after {bd:.2f} MPa" if bd else "no confirmed drop"
+        drop += _depth(row)
         short = peak_cut_short(row)
         shorts.append(short)
         over = [w for w in row.get("in_situ_wall_tension") or () if w.get("exceeds")]
@@ -449,9 +465,8 @@ def _peak_rows(
         for row in r.rows:
             name = str(row["value"])
             shown = _shown(name) if name.startswith("no") else f"{label} {name}"
-            bd = row.get("breakdown_pressure_MPa")
             peak = row.get("peak_pressure_MPa")
-            note = "confirmed by a drop" if bd else "highest pressure of the run, no drop"
+            note = _confirmation(row)
             short = peak_cut_short(row)
             if short:
                 note = f"{short}; {note}"
@@ -808,8 +823,7 @@ def peak_against(
 
     def compare(r: CaseResult) -> list[Comparison]:
         s = r.summary
-        bd = s.get("breakdown_pressure_MPa")
-        extra = "confirmed by a drop" if bd else "highest pressure of the run, no drop"
+        extra = _confirmation(s)
         short = peak_cut_short(s)
         if short:
             extra = f"{short}; {extra}"

@@ -12,23 +12,40 @@ pressure is still rising, or only wobbles).  Nor has a history whose peak is
 its first record after the start: the rise to it is not resolved, and a run
 that starts from an open crack (KGD) only propagates, its pressure falling from
 the first step on (:func:`breakdown_note` says which).
+
+How deep the pressure falls after the breakdown (:attr:`Breakdown.drop`) says how
+firm it is: a peak confirmed by a dip of about the threshold may move, or vanish,
+when only the iteration order changes (No. 2's coarse seepage run with full joints:
+a 1 % dip at 109 s; benchmarks/README.md, 2026-12-06), while a collapse of tens of
+percent does not.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 
 @dataclass(frozen=True)
 class Breakdown:
-    """Peak pressure (Pa) and its time (s), and when the drop confirmed it."""
+    """Peak pressure (Pa) and its time (s), when the drop confirmed it, and its depth.
+
+    ``drop``: how far (Pa) the pressure fell below the peak afterwards, at its
+    lowest before it regained the peak or the history ended.
+    """
 
     pressure: float
     time: float
     confirmed_at: float
+    drop: float = 0.0
+
+    @property
+    def relative_drop(self) -> float:
+        """The drop as a share of the peak pressure (0 for a peak of zero)."""
+        return self.drop / self.pressure if self.pressure else 0.0
 
 
 def detect_breakdown(
@@ -36,8 +53,14 @@ def detect_breakdown(
     pressures: Sequence[float],
     drop_fraction: float = 0.05,
     hold: int = 3,
+    not_before: float = -math.inf,
 ) -> Breakdown | None:
-    """Return the breakdown of a pressure history, or None (see the module docstring)."""
+    """Return the breakdown of a pressure history, or None (see the module docstring).
+
+    ``not_before``: a drop confirms a peak only at records from this time on (s);
+    a pumped run with seepage passes its first break's, since a fall while
+    nothing has broken is the joints taking fluid, not a breakdown.
+    """
     if not 0.0 < drop_fraction < 1.0:
         raise ValueError(f"drop_fraction must be in (0, 1), got {drop_fraction!r}")
     t = np.asarray(times, dtype=float)
@@ -52,6 +75,7 @@ def detect_breakdown(
     peak, peak_index = p[0], 0
     below = 0
     found: Breakdown | None = None
+    found_index = 0
     for i in range(1, len(p)):
         if p[i] > peak:
             peak, peak_index, below = p[i], i, 0
@@ -59,11 +83,18 @@ def detect_breakdown(
         rise = peak - start
         below = below + 1 if rise > 0.0 and peak - p[i] >= drop_fraction * rise else 0
         # a peak on the first record is not confirmed: the rise to it is not resolved
-        if below >= hold and peak_index > 1 and (found is None or found.pressure < peak):
+        confirms = below >= hold and peak_index > 1 and t[i] >= not_before
+        if confirms and (found is None or found.pressure < peak):
             found = Breakdown(
                 pressure=float(peak), time=float(t[peak_index]), confirmed_at=float(t[i])
             )
-    return found
+            found_index = peak_index
+    if found is None:
+        return None
+    after = p[found_index + 1 :]
+    regained = np.flatnonzero(after > found.pressure)
+    after = after[: regained[0]] if regained.size else after
+    return replace(found, drop=float(found.pressure - after.min()))
 
 
 def peak_is_lower_bound(peak: float, breakdown: float | None, validity_limit: bool) -> bool:

@@ -384,6 +384,8 @@ def _summarise(
         "scene": scene.name,
         "breakdown_pressure_MPa": found.pressure / 1e6 if found else None,
         "breakdown_time_s": found.time if found else None,
+        # how far the pressure fell after it: a dip near the threshold is a fragile answer
+        "breakdown_drop_MPa": found.drop / 1e6 if found else None,
         "breakdown_note": breakdown_note(
             pressures, found, "crack" in solid.tmesh.facet_names, validity_limit=limit
         ),

@@ -357,6 +357,7 @@ def _write_results(out: Path, study: Study, rows: list[dict[str, Any]]) -> None:
         "case",
         "x",
         "breakdown_pressure_MPa",
+        "breakdown_drop_MPa",
         "peak_pressure_MPa",
         "first_crack_pressure_MPa",
         "first_crack_time_s",
