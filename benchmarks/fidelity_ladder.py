@@ -53,7 +53,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 from hfcdem.config.scene import load_scene
-from hfcdem.workflows.breakdown import detect_breakdown
+from hfcdem.coupling.breakdown import detect_breakdown
 from hfcdem.workflows.run import run_scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -104,7 +104,7 @@ def shared_breakdown(path: Path, initial_pressure: float) -> str:
     """The breakdown of a run's ``history.csv`` by the uniform and viscous rungs' rule (MPa).
 
     Every rung takes the highest peak followed by a sustained fall of 5 % of
-    the rise (:func:`~hfcdem.workflows.breakdown.detect_breakdown`; a pumped
+    the rise (:func:`~hfcdem.coupling.breakdown.detect_breakdown`; a pumped
     seepage run took the first peak followed by a 1 % fall until 2026-12-06).
     A pumped seepage run reads it on each step's highest pressure and only
     after its first break; this column reads every rung's step-end pressures

@@ -58,7 +58,7 @@ _API = {
     "run_scene": "hfcdem.workflows.run",
     "load_study": "hfcdem.workflows.study",
     "run_study": "hfcdem.workflows.study",
-    "detect_breakdown": "hfcdem.workflows.breakdown",
+    "detect_breakdown": "hfcdem.coupling.breakdown",
     "in_situ_wall_tension": "hfcdem.workflows.wall_stress",
     "read_results": "hfcdem.io.files",
     "Results": "hfcdem.io.files",

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from hfcdem.workflows.breakdown import breakdown_note, detect_breakdown
+from hfcdem.coupling.breakdown import breakdown_note, detect_breakdown
 
 
 def test_peak_then_sustained_drop():

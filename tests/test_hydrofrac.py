@@ -18,6 +18,7 @@ from hfcdem.analytic import kgd_viscosity
 from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
 from hfcdem.config.parts import Crack, MeshSizing, Plate, Wellbore
 from hfcdem.config.plates import BoreholeSquare, KGDStrip
+from hfcdem.coupling.breakdown import detect_breakdown
 from hfcdem.coupling.groups import condense_network, network_volumes
 from hfcdem.coupling.hydrofrac import FlowSettings, HydraulicFracture, SimulationStopped
 from hfcdem.flow.balance import GroupBalance
@@ -29,7 +30,6 @@ from hfcdem.solid.fragments import Fragments
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import OPEN, STICK
 from hfcdem.solvers import ValidityLimit
-from hfcdem.workflows.breakdown import detect_breakdown
 
 # seed 000 section 4.2: E 25 GPa, nu 0.25, water, Q0 = 4 kg/s per metre (half model: 2)
 ROCK = ElasticMaterial(25e9, 0.25)

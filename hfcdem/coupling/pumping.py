@@ -32,7 +32,7 @@ cavity opens.  A step in which an interface would cross its envelope is
 shortened to the crossing (the loads interpolated linearly within it).
 
 The breakdown is found as for every coupled run
-(:func:`~hfcdem.workflows.breakdown.detect_breakdown`: the highest peak that a
+(:func:`~hfcdem.coupling.breakdown.detect_breakdown`: the highest peak that a
 sustained drop confirms; a peak cut off by the end of the run is flagged, not
 published), on the cavity pressure with each step's highest pressure, and only
 by a drop once some interface has broken (a dip while the dry joints take fluid
@@ -55,6 +55,7 @@ import ufl
 from mpi4py import MPI
 
 from hfcdem.config.materials import Fluid
+from hfcdem.coupling.breakdown import detect_breakdown
 from hfcdem.coupling.condense import cavity_vertices, mesh_cavity_volume
 from hfcdem.coupling.events import (
     check_small_displacement,
@@ -88,7 +89,6 @@ from hfcdem.solid.fragments import Fragments
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import OPEN, CascadeStopped
 from hfcdem.solvers import ValidityLimit
-from hfcdem.workflows.breakdown import detect_breakdown
 
 #: called with the time, the fluid pressure and the saturation per local facet
 Frames = Callable[[float, np.ndarray, np.ndarray], None]

@@ -20,8 +20,8 @@ import numpy as np
 from hfcdem import references
 from hfcdem.analytic import kgd_viscosity
 from hfcdem.config.geometry import Scene
+from hfcdem.coupling.breakdown import peak_is_lower_bound
 from hfcdem.io.series import read_facets
-from hfcdem.workflows.breakdown import peak_is_lower_bound
 from hfcdem.workflows.places import (
     STRESS_FIGURE,
     plot_stress_along_tunnels,

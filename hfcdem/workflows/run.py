@@ -34,6 +34,7 @@ from mpi4py import MPI
 
 from hfcdem.config.geometry import Scene
 from hfcdem.config.tables import SceneError
+from hfcdem.coupling.breakdown import breakdown_note, detect_breakdown
 from hfcdem.coupling.hydrofrac import (
     FlowSettings,
     HydraulicFracture,
@@ -47,7 +48,6 @@ from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import FieldSeries
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solvers import ValidityLimit
-from hfcdem.workflows.breakdown import breakdown_note, detect_breakdown
 from hfcdem.workflows.observers import (
     CheckpointWriter,
     FirstCrack,

@@ -38,6 +38,7 @@ from mpi4py import MPI
 from hfcdem.config.physics import Physics
 from hfcdem.config.scene import Scene
 from hfcdem.config.tables import SceneError
+from hfcdem.coupling.breakdown import peak_is_lower_bound
 from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakdown
 from hfcdem.coupling.pumping import COST_COLUMNS, PumpingResult, pump_with_seepage
 from hfcdem.io.files import write_csv, write_interfaces, write_json
@@ -45,7 +46,6 @@ from hfcdem.io.history import HistoryFile
 from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import InterfaceFrames
 from hfcdem.solid.cdem import CDEMSolid
-from hfcdem.workflows.breakdown import peak_is_lower_bound
 from hfcdem.workflows.places import (
     plot_first_crack_stress,
     stress_along_tunnels,
@@ -414,7 +414,7 @@ def pumping_note(result: PumpingResult) -> str | None:
 
     The validity limit leaves a breakdown in doubt when the pressure rose past
     it before the run stopped: the run's highest pressure then bounds the
-    breakdown from below (:func:`hfcdem.workflows.breakdown.peak_is_lower_bound`,
+    breakdown from below (:func:`hfcdem.coupling.breakdown.peak_is_lower_bound`,
     the rule of the other rungs and of the report).
     """
     cut_short = peak_is_lower_bound(result.peak_pressure, result.breakdown, result.validity_limit)
