@@ -11,8 +11,9 @@ joined to the cavity take its fluid at its pressure
 Printed per rate: the first break, the breakdown (the highest peak that a
 sustained fall confirms, :func:`hfcdem.coupling.breakdown.detect_breakdown`;
 the first peak followed by a 1 % fall until 2026-12-06), the highest pressure
-of the run, the failures, the share of joints holding pressure at the end, the largest mass-balance error and the wall time;
-then the time-step series of one rate (``--series``).
+of the run, the failures, the share of joints holding pressure at the end,
+the largest mass-balance error and the wall time; then the time-step series
+of one rate (``--series``).
 
     make run CMD="python3 benchmarks/pumping_rate.py"
     make run CMD="python3 benchmarks/pumping_rate.py --divisions 10 --series 2e-6"
