@@ -193,7 +193,7 @@ def breakdown_words(summary: dict[str, Any]) -> str:
         note = f"{note}; highest pressure {peak:.2f} MPa"
     if bd:
         drop = summary.get("breakdown_drop_MPa")
-        said = [f"then {drop:.2f} MPa lower at most"] if drop is not None else []
+        said = [f"the pressure fell {drop:.2f} MPa after it"] if drop is not None else []
         said += [note] if note else []
         return f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s" + (
             f" ({'; '.join(said)})" if said else ""

@@ -93,7 +93,7 @@ def test_the_last_line_gives_the_breakdown_or_why_not_with_the_highest_pressure(
     assert breakdown_words(stood) == "4.61 MPa at 0.75 s"
     # how far the pressure fell after the breakdown says how firm it is
     assert breakdown_words({**stood, "breakdown_drop_MPa": 1.41}) == (
-        "4.61 MPa at 0.75 s (then 1.41 MPa lower at most)"
+        "4.61 MPa at 0.75 s (the pressure fell 1.41 MPa after it)"
     )
     none = {**doubted, "breakdown_pressure_MPa": None, "breakdown_note": "still rises"}
     assert breakdown_words(none) == "none (still rises; highest pressure 10.12 MPa)"
