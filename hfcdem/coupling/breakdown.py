@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -40,7 +40,7 @@ class Breakdown:
     pressure: float
     time: float
     confirmed_at: float
-    drop: float = 0.0
+    drop: float
 
     @property
     def relative_drop(self) -> float:
@@ -74,8 +74,7 @@ def detect_breakdown(
     start = p[0]
     peak, peak_index = p[0], 0
     below = 0
-    found: Breakdown | None = None
-    found_index = 0
+    found: tuple[int, int] | None = None  # the peak's record and the confirming one
     for i in range(1, len(p)):
         if p[i] > peak:
             peak, peak_index, below = p[i], i, 0
@@ -84,17 +83,20 @@ def detect_breakdown(
         below = below + 1 if rise > 0.0 and peak - p[i] >= drop_fraction * rise else 0
         # a peak on the first record is not confirmed: the rise to it is not resolved
         confirms = below >= hold and peak_index > 1 and t[i] >= not_before
-        if confirms and (found is None or found.pressure < peak):
-            found = Breakdown(
-                pressure=float(peak), time=float(t[peak_index]), confirmed_at=float(t[i])
-            )
-            found_index = peak_index
+        if confirms and (found is None or p[found[0]] < peak):
+            found = (peak_index, i)
     if found is None:
         return None
-    after = p[found_index + 1 :]
-    regained = np.flatnonzero(after > found.pressure)
+    k, confirmed = found
+    after = p[k + 1 :]
+    regained = np.flatnonzero(after > p[k])
     after = after[: regained[0]] if regained.size else after
-    return replace(found, drop=float(found.pressure - after.min()))
+    return Breakdown(
+        pressure=float(p[k]),
+        time=float(t[k]),
+        confirmed_at=float(t[confirmed]),
+        drop=float(p[k] - after.min()),
+    )
 
 
 def peak_is_lower_bound(peak: float, breakdown: float | None, validity_limit: bool) -> bool:
