@@ -667,6 +667,7 @@ class HydraulicFracture:
             newton_iterations=its,
             rebuilds=self.rebuilds,
             wall_time=time.perf_counter() - self.wall_start,
+            held_shut=self.solid.held_shut.count,
         )
 
     def settle(self) -> int:

@@ -31,6 +31,9 @@ class StepRecord:
     newton_iterations: int
     rebuilds: int
     wall_time: float
+    # broken facets contact hysteresis held shut at the step's last contact check;
+    # histories written before this column read back as 0
+    held_shut: int = 0
 
     def as_row(self) -> dict[str, float]:
         """Return the record as a flat dict (the columns of history.csv)."""
