@@ -130,8 +130,11 @@ def test_contact_hysteresis_leaves_a_run_without_reclosing_facets_alone(shared_t
         assert runs[True][key] == pytest.approx(runs[False][key], rel=1e-12), key
     assert runs[True]["rebuild_causes"] == runs[False]["rebuild_causes"]
     assert runs[True]["rebuild_causes"]["contact"] > 0
-    for run in runs.values():
+    for on, run in runs.items():
         assert run["contact_held_shut"] == {"count": 0, "excess": 0.0}
+        with (shared_tmp_path / f"hysteresis_{on}" / "history.csv").open() as f:
+            held = [float(row["held_shut"]) for row in csv.DictReader(f)]
+        assert held and set(held) == {0}  # the per-step column agrees with the summary
     rows = json.loads((shared_tmp_path / "hysteresis_True" / "checkpoint.json").read_text())
     assert all(len(row) == 6 for row in rows["interfaces"]) and rows["interfaces"]
     shut = [row[5] for row in rows["interfaces"] if row[2] != OPEN]
