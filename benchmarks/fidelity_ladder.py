@@ -82,6 +82,8 @@ def scene_text(rung: str) -> str:
         text = re.sub(r"(?m)^wall_film = .*\n", "", text)
     if rung in SEEPAGE:
         text = re.sub(r'(?m)^wall_joints = "[a-z]+"', 'wall_joints = "seepage"', text)
+        # its steps go back to time_step after every break: it takes no pressure bound
+        text = re.sub(r"(?m)^max_pressure_change = .*\n", "", text)
     if rung in LANDING:
         text = text.replace("[solver]\n", f'[solver]\nbreak_landing = "{LANDING[rung]}"\n', 1)
     if rung == "seepage-wet":

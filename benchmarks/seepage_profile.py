@@ -48,6 +48,7 @@ def _scene_text(duration: float, bulk_modulus: str) -> str:
     text = (ROOT / "meshes/scenes/perforation_no2.toml").read_text()
     text = re.sub(r"(?m)^wall_film = .*\n", "", text)
     text = re.sub(r'(?m)^wall_joints = "[a-z]+"', 'wall_joints = "seepage"', text)
+    text = re.sub(r"(?m)^max_pressure_change = .*\n", "", text)  # not taken by seepage
     text = re.sub(r'(?m)^duration = "[^"]*"', f'duration = "{duration:g} s"', text)
     text = re.sub(r'(?m)^bulk_modulus = "[^"]*"', f'bulk_modulus = "{bulk_modulus}"', text)
     return text.replace('name = "perforation_no2"', 'name = "no2_seepage_profile"')

@@ -329,6 +329,7 @@ def test_no2_with_apertures_held_at_5_mm_pumps_on_through_the_solves_noise(share
         "fluid.bulk_modulus": "2.2 GPa",
         "rock.joint_reference_size": "5 mm",
         "injection.duration": "1.2 s",
+        "solver.max_pressure_change": None,
     }
     scene = load_scene("meshes/scenes/perforation_no2.toml", "coarse", overrides=sets)
     summary = run_scene(scene, shared_tmp_path / "no2_held")

@@ -613,7 +613,8 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             pump.get("wall_joints") != "seepage" or solver.max_pressure_change == math.inf,
             "solver.max_pressure_change",
             'not taken by a seepage run (injection.wall_joints = "seepage"), whose steps '
-            "follow solver.time_step and solver.max_time_step; leave it out",
+            "follow solver.time_step and solver.max_time_step; leave it out "
+            "(--set solver.max_pressure_change= drops a scene's)",
         )
         _check(
             pump.get("wall_joints") == "seepage" or solver.break_landing == "exact",
