@@ -6,6 +6,7 @@ one dry triangle far from it, around No. 2's tunnel (the scene is loaded, not
 meshed).
 """
 
+import math
 from pathlib import Path
 
 import meshio
@@ -19,6 +20,7 @@ from hfcdem.reproduce.compare import CaseResult
 from hfcdem.reproduce.saturation import (
     SATURATION_FIGURE,
     SEEPAGE_RUNG,
+    TO_SEEPAGE,
     filling_times,
     plot_saturation,
     saturation_in_time,
@@ -60,6 +62,17 @@ def _run_dir(root: Path, scene) -> Path:
     (root / "joints.pvd").write_text("<Collection>\n" + "\n".join(listed) + "\n</Collection>\n")
     _history(root / "history.csv")
     return root
+
+
+def test_every_scene_that_bounds_its_steps_turns_into_a_seepage_run():
+    """The seepage conversion drops the scenes' pressure bound, which seepage refuses."""
+    scenes = SCENE.parent
+    for name in ("perforation_no2", "shape_1-2", "field_cluster"):
+        bounded = load_scene(scenes / f"{name}.toml", "coarse")
+        assert bounded.physics.solver.max_pressure_change == pytest.approx(0.02), name
+        seeping = load_scene(scenes / f"{name}.toml", "coarse", overrides=TO_SEEPAGE)
+        assert seeping.physics.wall_joints == "seepage", name
+        assert seeping.physics.solver.max_pressure_change == math.inf, name
 
 
 def test_rows_and_picture_of_the_joints_filling(tmp_path):

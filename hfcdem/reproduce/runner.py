@@ -25,6 +25,7 @@ from hfcdem.io.files import prepare_output_dir, write_json
 from hfcdem.mesh.tagged import MeshingError
 from hfcdem.reproduce.cases import FIDELITIES, Case, Tier, select_cases
 from hfcdem.reproduce.compare import CaseResult, Comparison
+from hfcdem.reproduce.saturation import TO_SEEPAGE
 from hfcdem.reproduce.watchdog import Watchdog
 from hfcdem.solvers import SimulationStopped, SolverError
 
@@ -201,8 +202,7 @@ def _overrides(fidelity: str) -> dict[str, Any]:
     if fidelity == "scene":
         return {}
     if fidelity == "seepage":
-        # a seepage run's steps go back to solver.time_step after every break: no bound
-        return {"injection.wall_joints": "seepage", "solver.max_pressure_change": None}
+        return dict(TO_SEEPAGE)
     return {"solver.fidelity": fidelity}
 
 

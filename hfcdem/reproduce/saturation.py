@@ -29,12 +29,17 @@ SATURATION_FIGURE = "saturation.png"
 #: times shown (s): Fig. 14's span, "over 1 to 60 s"
 SHOWN_TIMES = (1.0, 5.0, 10.0, 60.0)
 
+#: a scene's joints made to seep; a seepage run's steps go back to solver.time_step
+#: after every break, so it takes no bound on the pressure change (the scene's is dropped)
+TO_SEEPAGE: dict[str, Any] = {
+    "injection.wall_joints": "seepage",
+    "solver.max_pressure_change": None,
+}
+
 #: No. 2's scene turned into the seepage rung (benchmarks/fidelity_ladder.py), frames every 1 s
 SEEPAGE_RUNG: dict[str, Any] = {
-    "injection.wall_joints": "seepage",
+    **TO_SEEPAGE,
     "injection.wall_film": None,
-    # its steps go back to solver.time_step after every break: it takes no pressure bound
-    "solver.max_pressure_change": None,
     "fluid.bulk_modulus": "2.2 GPa",
     "output.interval": "1 s",
 }
@@ -154,6 +159,7 @@ __all__ = [
     "SATURATION_FIGURE",
     "SEEPAGE_RUNG",
     "SHOWN_TIMES",
+    "TO_SEEPAGE",
     "filling_times",
     "plot_saturation",
     "saturation_in_time",
