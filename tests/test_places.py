@@ -11,6 +11,8 @@ from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceMode
 from hfcdem.config.scene import load_scene
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.workflows.places import (
+    place_counts,
+    place_ratios,
     stress_along_tunnels,
     tunnel_place,
     turn_past_tips,
@@ -57,6 +59,25 @@ def test_distances_are_across_the_wellbore_axis():
 def test_the_tunnels_thirds_name_the_places():
     places = [tunnel_place(d, 0.23) for d in (0.0, 0.07, 0.1225, 0.2, 0.23, 0.3)]
     assert places == ["root", "root", "middle", "far end", "far end", "beyond the tip"]
+
+
+def test_parts_of_the_tunnel_count_points_and_keep_their_highest_ratio():
+    """Rank 0 holds the points, the others none: the answer is the same on any rank count."""
+    comm = MPI.COMM_WORLD
+    scene = perforated(radius=0.1, length=0.6)  # thirds end at 0.2, 0.4, 0.6 m from the wall
+    pts = np.array([[0.15, 0.0, 0.0], [0.2, 1.0, 0.0], [0.45, 0.0, 0.0], [0.0, 0.0, 0.9]])
+    ratio = np.array([0.4, 0.97, 1.02, 0.3])
+    mine = slice(None) if comm.rank == 0 else slice(0)
+    assert place_counts(scene, pts[mine], comm) == {"root": 2, "middle": 1, "beyond the tip": 1}
+    assert place_ratios(scene, pts[mine], ratio[mine], comm) == {
+        "root": pytest.approx(0.97),
+        "middle": pytest.approx(1.02),
+        "far end": 0.0,  # no facet there
+        "beyond the tip": pytest.approx(0.3),
+    }
+    plate = SimpleNamespace(geometry=SimpleNamespace())
+    assert place_counts(plate, pts, comm) is None
+    assert place_ratios(plate, pts, ratio, comm) is None
 
 
 def test_the_turn_past_the_tips_is_measured_from_sh():

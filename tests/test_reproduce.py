@@ -203,6 +203,27 @@ def test_a_breakdown_row_says_how_deep_the_pressure_fell_after_it(tmp_path):
     assert row.note == "confirmed by a drop"
 
 
+def test_a_first_crack_row_says_where_its_step_broke_and_how_near_the_rest_came(tmp_path):
+    # No. 2 coarse: the far-end facet reached its strength first, five in the middle followed
+    first = {"distance_from_wellbore_wall_m": 0.1539, "place": "far end",
+             "interfaces_by_place": {"middle": 5, "far end": 2},
+             "ratio_by_place": {"root": 0.8675, "middle": 0.861, "far end": 1.0005,
+                                "beyond the tip": 0.585}}  # fmt: skip
+    summary = {"peak_pressure_MPa": 64.17, "first_crack": first, "first_crack_time_s": 53.14}
+    _, row = peak_against("p", 64.01, "s", 0.1)(CaseResult(tmp_path, (), summary=summary))
+    assert row.ours_text == (
+        "far end, 153.9 mm from the wellbore wall at 53.1 s; its step broke 5 middle, "
+        "2 far end; highest failure ratio then: root 0.87, middle 0.86, far end 1.00, "
+        "beyond the tip 0.58"
+    )
+    assert row.met is False
+    alone = first | {"interfaces_by_place": {"far end": 2}, "ratio_by_place": {}}
+    _, row = peak_against("p", 64.01, "s", 0.1)(
+        CaseResult(tmp_path, (), summary=summary | {"first_crack": alone})
+    )
+    assert row.ours_text == "far end, 153.9 mm from the wellbore wall at 53.1 s"
+
+
 def _facets_at(path, centres):
     """A fracture.vtu of small triangles centred at ``centres`` (the lab's broken interfaces)."""
     import meshio
@@ -370,6 +391,11 @@ def test_first_cracks_of_the_four_charges_against_the_root(tmp_path):
     assert row.ours_text == "1 of 2: No. 1 far end (157 mm), No. 2 root (41 mm)"
     (row,) = first_cracks(CaseResult(tmp_path, (), rows=rows[1:]))
     assert row.met
+    # how near the root came when the first facet reached its strength
+    near = {"ratio_by_place": {"root": 0.867, "middle": 0.86, "far end": 1.0}}
+    rows = ({"value": "no1", "first_crack": rows[0]["first_crack"] | near},)
+    (row,) = first_cracks(CaseResult(tmp_path, (), rows=rows))
+    assert row.ours_text == "0 of 1: No. 1 far end (157 mm, root at 0.87)"
     assert first_cracks(CaseResult(tmp_path, (), rows=({"value": "no1"},))) == []
 
 

@@ -456,3 +456,9 @@ def test_a_tunnel_run_records_sigma_xx_at_its_first_crack(shared_tmp_path):
     pressure = float(rows[0]["injection_pressure"]) / 1e6
     assert profile["peak_MPa"] == pytest.approx(-pressure, rel=0.01)
     assert (out / "sigma_xx.png").stat().st_size > 0
+    # the first crack is the facet that reached its strength first: its part of the
+    # tunnel holds the highest failure ratio then, the others how near they came
+    ratios = first["ratio_by_place"]
+    assert ratios[first["place"]] == max(ratios.values()) and ratios[first["place"]] >= 1.0
+    assert first["mode"] == "tensile"
+    assert sum(first["interfaces_by_place"].values()) == first["interfaces"]

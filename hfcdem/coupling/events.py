@@ -8,6 +8,7 @@ more than its cells' size ends a run at the model's validity limit.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -67,6 +68,26 @@ def facets_to_break(solid: CDEMSolid, ratio: np.ndarray, cap: int | None) -> np.
     return select_breaking(ratio, solid.midpoints, rule, count, solid.comm)
 
 
+def most_overstressed(
+    solid: CDEMSolid, ratio: np.ndarray, mode: np.ndarray
+) -> tuple[int, np.ndarray]:
+    """Mode and midpoint of the facet with the highest failure ``ratio`` (collective).
+
+    The same on every rank; ties (symmetric facets) go to the lowest midpoint,
+    whatever the number of ranks.  Mode 0 and the origin when no facet is at its
+    strength.
+    """
+    mine = (-math.inf, 0, np.zeros(solid.gdim))
+    if ratio.size and float(ratio.max()) >= 1.0:
+        f = int(np.argmax(ratio))
+        mine = (float(ratio[f]), int(mode[f]), solid.midpoints[f, : solid.gdim].copy())
+    best = max(
+        solid.comm.allgather(mine),
+        key=lambda item: (round(item[0], 12), *(-float(x) for x in item[2])),
+    )
+    return best[1], np.asarray(best[2])
+
+
 def release_debris(
     solid: CDEMSolid, fragments: Fragments, supports: Sequence[str] = ()
 ) -> tuple[int, int, int]:
@@ -123,6 +144,7 @@ __all__ = [
     "LOOSE_JUMP",
     "check_small_displacement",
     "facets_to_break",
+    "most_overstressed",
     "release_debris",
     "switch_contacts",
 ]

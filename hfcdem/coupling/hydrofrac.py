@@ -47,6 +47,7 @@ from hfcdem.coupling.condense import (
 from hfcdem.coupling.events import (
     check_small_displacement,
     facets_to_break,
+    most_overstressed,
     release_debris,
     switch_contacts,
 )
@@ -129,6 +130,13 @@ class HydraulicFracture:
         # what caused each rebuild (start, contact, break, band, fill, retry, resume)
         self.rebuild_causes: collections.Counter[str] = collections.Counter()
         self.first_break_time: float | None = None
+        # when the first facet reached its strength (the state a step landed on, else
+        # the break's): each local facet's failure ratio (how near the others came),
+        # the mode and midpoint of the one that reached it; not kept by a checkpoint
+        self.first_break_ratio: np.ndarray | None = None
+        self.first_break_point: np.ndarray | None = None
+        self.first_break_mode = 0
+        self._landed: tuple[float, np.ndarray, np.ndarray] | None = None
         self.initial_failures = 0
         self.wall_start = time.perf_counter()
         for name in (*s.cavity, *s.supports):
@@ -485,6 +493,8 @@ class HydraulicFracture:
                 if self.stepper.landed(worst):
                     # landed on the next break: record this state (the peak before it
                     # breaks) and let the next step break it
+                    if self.first_break_time is None:
+                        self._landed = (t1, ratio.copy(), mode.copy())
                     break
             if self._break(ratio, mode, t1):
                 changed_states = True
@@ -577,6 +587,11 @@ class HydraulicFracture:
         self.solid.break_facets(chosen, mode[chosen], t1)
         if self.first_break_time is None:
             self.first_break_time = t1
+            at, how = ratio, mode
+            if self._landed is not None and self._landed[0] == self.t:  # the step before
+                _, at, how = self._landed
+            self.first_break_ratio = at.copy()
+            self.first_break_mode, self.first_break_point = most_overstressed(self.solid, at, how)
         self._recondense("break")
         return True
 
@@ -691,6 +706,7 @@ class HydraulicFracture:
             )
         self.history.clear()
         self.first_break_time = None
+        self.first_break_ratio = self.first_break_point = self._landed = None
         self.initial_failures = sum(self.solid.broken_counts().values()) - before
         return self.initial_failures
 

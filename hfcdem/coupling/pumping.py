@@ -60,6 +60,7 @@ from hfcdem.coupling.condense import cavity_vertices, mesh_cavity_volume
 from hfcdem.coupling.events import (
     check_small_displacement,
     facets_to_break,
+    most_overstressed,
     release_debris,
     switch_contacts,
 )
@@ -215,7 +216,7 @@ def pump_with_seepage(
     max_state_iterations: int = 200,
     frames: Frames | None = None,
     supports: Sequence[str] = (),
-    at_first_break: Callable[[float], None] | None = None,
+    at_first_break: Callable[[float, np.ndarray], None] | None = None,
     contact_hysteresis: bool = True,
     records: Records | None = None,
 ) -> PumpingResult:
@@ -234,8 +235,9 @@ def pump_with_seepage(
     ``frames`` is called (collectively) at the start and after every step with
     the time and the fluid pressure and saturation per local facet
     (:meth:`_PumpedCavity.fields`); ``at_first_break``
-    (collectively) with the time, after the step of the first break, when the
-    solid holds that step's state.  ``contact_hysteresis``: see
+    (collectively) with the time and each local facet's failure ratio when the
+    first facets broke, after the step of the first break, when the solid holds
+    that step's state.  ``contact_hysteresis``: see
     :meth:`~hfcdem.solid.states.InterfaceStates.switch_contacts`.  ``records``
     is called after every step with its history and cost rows (on every rank),
     so that a run stopped from outside keeps what it did.
@@ -646,8 +648,9 @@ class _PumpedCavity:
         """Advance from ``t`` by ``dt`` or less.
 
         Returns the step taken, the facets broken, the first break ``(cavity
-        pressure, mode, location)`` of the most over-stressed facet when the
-        step's first facets break (or None), and the highest cavity pressure of
+        pressure, mode, location, ratio)`` of the most over-stressed facet when the
+        step's first facets break, with every local facet's failure ratio then (or
+        None), and the highest cavity pressure of
         the step's states (the one at which the first facets break, before the
         pressure drops).  ``max_iterations`` bounds the passes between two
         breaks: a cascade (breakdown, one facet per pass) may take any number,
@@ -712,8 +715,8 @@ class _PumpedCavity:
             count = int(solid.comm.allreduce(len(chosen), op=MPI.SUM))
             if count == 0:
                 return dt, broken, first, top
-            if first is None:
-                first = (p, *_worst_facet(solid, ratio, mode))
+            if first is None:  # with every facet's ratio then: how near the others came
+                first = (p, *most_overstressed(solid, ratio, mode), ratio.copy())
             solid.break_facets(chosen, mode[chosen], t + dt)
             broken, rounds, passes = broken + count, 0, 0
             self.release_debris(t + dt)
@@ -760,7 +763,7 @@ class _PumpedCavity:
         progress: Callable[[str], None] | None,
         max_iterations: int,
         frames: Frames | None = None,
-        at_first_break: Callable[[float], None] | None = None,
+        at_first_break: Callable[[float, np.ndarray], None] | None = None,
         records: Records | None = None,
     ) -> PumpingResult:
         """Pump for the whole duration; return the result."""
@@ -817,7 +820,7 @@ class _PumpedCavity:
             if worst is not None and first is None:
                 first = (worst[0], t, worst[1], worst[2])
                 if at_first_break is not None:
-                    at_first_break(t)
+                    at_first_break(t, worst[3])
             held = self.volume * (1.0 + self.p / self.kw) + self.joint_content()
             error = abs(held - self.m0 - pumping.rate * t) / (pumping.rate * t)
             self.worst = max(self.worst, error)
@@ -884,20 +887,6 @@ class _PumpedCavity:
 
 class _Dry(RuntimeError):
     """A pumped step that cannot go on (the message says why)."""
-
-
-def _worst_facet(solid: CDEMSolid, ratio: np.ndarray, mode: np.ndarray) -> tuple[int, np.ndarray]:
-    """Mode and midpoint of the most over-stressed facet (the same on every rank)."""
-    mine = (-math.inf, 0, np.zeros(solid.gdim))
-    if ratio.size and float(ratio.max()) >= 1.0:
-        f = int(np.argmax(ratio))
-        mine = (float(ratio[f]), int(mode[f]), solid.midpoints[f, : solid.gdim].copy())
-    # ties (symmetric facets) go to the lowest midpoint, whatever the number of ranks
-    best = max(
-        solid.comm.allgather(mine),
-        key=lambda item: (round(item[0], 12), *(-float(x) for x in item[2])),
-    )
-    return best[1], np.asarray(best[2])
 
 
 __all__ = [

@@ -578,24 +578,40 @@ def failure_modes(r: CaseResult) -> list[Comparison]:
     ]  # fmt: skip
 
 
+def _rivals(first: Mapping[str, Any]) -> str:
+    """Say where the first crack's step broke and how near each part came to breaking then."""
+    parts = []
+    counts = first.get("interfaces_by_place") or {}
+    if counts and list(counts) != [first.get("place")]:
+        parts.append("its step broke " + ", ".join(f"{n} {p}" for p, n in counts.items()))
+    ratios = first.get("ratio_by_place") or {}
+    if ratios:
+        listed = ", ".join(f"{p} {v:.2f}" for p, v in ratios.items() if v > 0)
+        parts.append(f"highest failure ratio then: {listed}")
+    return "; ".join(parts)
+
+
 def first_cracks(r: CaseResult) -> list[Comparison]:
     """Where each case's first crack is, against the paper's root (Fig. 16), as one row."""
     places = []
     for row in r.rows:
         first = row.get("first_crack") or {}
         where, place = first.get("distance_from_wellbore_wall_m"), first.get("place")
+        root = (first.get("ratio_by_place") or {}).get("root")
         if where is not None and place is not None:
-            places.append((_shown(str(row["value"])), str(place), float(where)))
+            near = f", root at {root:.2f}" if root is not None and place != "root" else ""
+            places.append((_shown(str(row["value"])), str(place), f"{1e3 * where:.0f} mm{near}"))
     if not places:
         return []
     roots = sum(place == "root" for _, place, _ in places)
-    listed = ", ".join(f"{name} {place} ({1e3 * where:.0f} mm)" for name, place, where in places)
+    listed = ", ".join(f"{name} {place} ({where})" for name, place, where in places)
     return [
         Comparison("first crack at the root of every tunnel", roots,
                    ours_text=f"{roots} of {len(places)}: {listed}", reference_text="every one",
                    agrees=roots == len(places), source="the paper's Fig. 16",
                    note="distance from the wellbore wall; the tunnel's thirds: root, middle, "
-                   "far end")
+                   "far end; root at R: the root's highest failure ratio when the first "
+                   "facet reached its strength (1: a tie)")
     ]  # fmt: skip
 
 
@@ -841,7 +857,8 @@ def peak_against(
             rows.append(
                 Comparison("first crack place", where * 1e3,
                            ours_text=f"{place or ''}, {where * 1e3:.1f} mm from the wellbore "
-                           f"wall at {s.get('first_crack_time_s'):.3g} s",
+                           f"wall at {s.get('first_crack_time_s'):.3g} s"
+                           + (f"; {rivals}" if (rivals := _rivals(first)) else ""),
                            reference_text="root", agrees=place == "root" if place else None,
                            source="the paper's Figs. 10 and 16")
             )  # fmt: skip

@@ -79,6 +79,54 @@ def tunnel_place(distance: float, length: float) -> str:
     return "far end" if distance <= length else "beyond the tip"
 
 
+#: the tunnel's parts in order from the wellbore wall (:func:`tunnel_place`)
+PLACES = ("root", "middle", "far end", "beyond the tip")
+
+
+def _parts(scene: Scene, points: np.ndarray) -> np.ndarray | None:
+    """Name each point's part of the tunnels (:data:`PLACES`); None without tunnels."""
+    length = tunnel_length(scene)
+    distances = wall_distances(scene, points) if length is not None else None
+    if length is None or distances is None:
+        return None
+    return np.array([tunnel_place(float(d), length) for d in distances], dtype=object)
+
+
+def place_counts(scene: Scene, points: np.ndarray, comm: MPI.Comm) -> dict[str, int] | None:
+    """Return how many of the ranks' ``points`` lie in each part of the tunnels (collective).
+
+    Parts without a point are left out; None without tunnels.
+    """
+    names = _parts(scene, np.asarray(points, dtype=float))
+    if names is None:
+        return None
+    local = np.array([np.count_nonzero(names == name) for name in PLACES], dtype=np.int64)
+    total = np.zeros_like(local)
+    comm.Allreduce(local, total, op=MPI.SUM)
+    return {name: int(n) for name, n in zip(PLACES, total, strict=True) if n}
+
+
+def place_ratios(
+    scene: Scene, midpoints: np.ndarray, ratio: np.ndarray, comm: MPI.Comm
+) -> dict[str, float] | None:
+    """Return the highest failure ratio of the facets in each part of the tunnels (collective).
+
+    ``ratio`` is a solid's failure ratio per local facet (1: at its strength; 0 for
+    facets that may not break, e.g. broken, ghost or glued ones), ``midpoints`` the
+    facets' midpoints.  Read at the first break, it says how near the other parts
+    came to breaking first: a part at 0.998 is a near tie, and which one breaks
+    first is then a question of the step path, not of the rock.  Parts without a
+    facet that may break read 0.  None without tunnels.
+    """
+    names = _parts(scene, midpoints)
+    if names is None:
+        return None
+    local = np.array([np.max(ratio[names == name], initial=0.0) for name in PLACES], float)
+    highest = np.zeros_like(local)
+    comm.Allreduce(local, highest, op=MPI.MAX)
+    return {name: float(v) for name, v in zip(PLACES, highest, strict=True)}
+
+
 def _from_sh(v: np.ndarray) -> np.ndarray:
     """Angle (deg) of each row of ``v`` from the SH axis (x), folded into 0-90."""
     norm = np.linalg.norm(v, axis=1)
@@ -241,7 +289,10 @@ def plot_first_crack_stress(out: Path, scene: Scene, first: Mapping[str, Any] | 
 
 __all__ = [
     "COMPONENTS",
+    "PLACES",
     "STRESS_FIGURE",
+    "place_counts",
+    "place_ratios",
     "plot_first_crack_stress",
     "plot_stress_along_tunnels",
     "stress_along_tunnels",

@@ -58,6 +58,8 @@ from hfcdem.workflows.observers import (
     mesh_fingerprint,
 )
 from hfcdem.workflows.places import (
+    place_counts,
+    place_ratios,
     plot_first_crack_stress,
     stress_along_tunnels,
     wellbore_place,
@@ -555,12 +557,18 @@ def _peak_memory_mb(comm: MPI.Comm, op: MPI.Op = MPI.SUM) -> float:
 def _first_crack(
     scene: Scene, frac: HydraulicFracture, stress: bool = False
 ) -> dict[str, Any] | None:
-    """Where the injection's first interfaces broke (their mean midpoint).
+    """Where the injection's first crack is: the facet that reached its strength first.
 
-    ``distance_from_wellbore_wall_m``: from the wellbore wall, measured across the
-    wellbore axis (0 at a perforation root); None without a wellbore.  With
-    ``stress`` (called in the step of the first crack), ``sigma_xx``: the stress
-    along the tunnels then (:func:`stress_along_tunnels`, the paper's Fig. 18).
+    ``point_m``: its midpoint (the mean midpoint of the first step's breaks if it
+    is not known, as after a resume); ``mode``: how it failed; ``interfaces``: how
+    many broke in that step, ``interfaces_by_place``: in which parts of the
+    tunnels.  ``distance_from_wellbore_wall_m``: the point's from the wellbore
+    wall, measured across the wellbore axis (0 at a perforation root); None
+    without a wellbore.  ``ratio_by_place``: the highest failure ratio in each part
+    of the tunnels then (:func:`~hfcdem.workflows.places.place_ratios`), so a near
+    tie shows.  With ``stress`` (called in the step of the first crack),
+    ``sigma_xx``: the stress along the tunnels then (:func:`stress_along_tunnels`,
+    the paper's Fig. 18).
     """
     t = frac.first_break_time
     solid = frac.solid
@@ -572,8 +580,21 @@ def _first_crack(
     if count == 0:
         return None
     point = np.zeros(3)
-    point[:width] = np.asarray(total)[:width] / count
-    where = {"point_m": point.tolist(), "interfaces": count} | wellbore_place(scene, point)
+    where: dict[str, Any] = {"interfaces": count}
+    if frac.first_break_point is not None:
+        first = frac.first_break_point
+        point[: len(first)] = first
+        where["mode"] = {1: "tensile", 2: "shear"}.get(frac.first_break_mode, "intact")
+    else:
+        point[:width] = np.asarray(total)[:width] / count
+    where = {"point_m": point.tolist()} | where | wellbore_place(scene, point)
+    by_place = place_counts(scene, pts, solid.comm)
+    if by_place:  # the mean midpoint of a root and a far-end facet is in the middle
+        where["interfaces_by_place"] = by_place
+    ratio = frac.first_break_ratio
+    ratios = place_ratios(scene, solid.midpoints, ratio, solid.comm) if ratio is not None else None
+    if ratios:
+        where["ratio_by_place"] = ratios
     profile = stress_along_tunnels(scene, solid) if stress else None
     return where | ({"time_s": t, "sigma_xx": profile} if profile else {})
 

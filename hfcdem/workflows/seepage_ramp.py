@@ -47,6 +47,7 @@ from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import InterfaceFrames
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.workflows.places import (
+    place_ratios,
     plot_first_crack_stress,
     stress_along_tunnels,
     wellbore_place,
@@ -307,7 +308,10 @@ def _run_pumped(
 
     stress: dict[str, Any] = {}
 
-    def at_first_break(t: float) -> None:
+    def at_first_break(t: float, ratio: np.ndarray) -> None:
+        ratios = place_ratios(scene, solid.midpoints, ratio, comm)
+        if ratios:
+            stress.update(ratio_by_place=ratios)
         profile = stress_along_tunnels(scene, solid)
         if profile:
             stress.update(time_s=t, sigma_xx=profile)
