@@ -591,6 +591,19 @@ def _rivals(first: Mapping[str, Any]) -> str:
     return "; ".join(parts)
 
 
+def _root_cracked(first: Mapping[str, Any]) -> bool | None:
+    """Tell whether the root cracked first (None: no place known).
+
+    The first facet is there, or a root facet was at its strength in the same state
+    (a step that broke both without landing between them).
+    """
+    place = first.get("place")
+    if place is None:
+        return None
+    root = (first.get("ratio_by_place") or {}).get("root")
+    return place == "root" or (root is not None and root >= 1.0)
+
+
 def first_cracks(r: CaseResult) -> list[Comparison]:
     """Where each case's first crack is, against the paper's root (Fig. 16), as one row."""
     places = []
@@ -600,19 +613,27 @@ def first_cracks(r: CaseResult) -> list[Comparison]:
         root = (first.get("ratio_by_place") or {}).get("root")
         if where is not None and place is not None:
             near = f", root at {root:.2f}" if root is not None and place != "root" else ""
-            places.append((_shown(str(row["value"])), str(place), f"{1e3 * where:.0f} mm{near}"))
+            shown = f"{place} ({1e3 * where:.0f} mm{near})"
+            places.append((_shown(str(row["value"])), shown, bool(_root_cracked(first))))
     if not places:
         return []
-    roots = sum(place == "root" for _, place, _ in places)
-    listed = ", ".join(f"{name} {place} ({where})" for name, place, where in places)
+    roots = sum(cracked for _, _, cracked in places)
+    listed = ", ".join(f"{name} {shown}" for name, shown, _ in places)
     return [
         Comparison("first crack at the root of every tunnel", roots,
                    ours_text=f"{roots} of {len(places)}: {listed}", reference_text="every one",
                    agrees=roots == len(places), source="the paper's Fig. 16",
                    note="distance from the wellbore wall; the tunnel's thirds: root, middle, "
-                   "far end; root at R: the root's highest failure ratio when the first "
-                   "facet reached its strength (1: a tie)")
+                   f"far end; {_ROOT_NOTE}")
     ]  # fmt: skip
+
+
+#: how a first-crack row reads the root's failure ratio
+_ROOT_NOTE = (
+    "root at R: the highest failure ratio at the root when the first facet reached its "
+    "strength (1: at its strength too; a step that breaks without landing on the first "
+    "break can find the root past it, and the root then counts as cracked first)"
+)
 
 
 #: why a fracture degree is the paper's own choice (its value is listed, not judged)
@@ -859,8 +880,9 @@ def peak_against(
                            ours_text=f"{place or ''}, {where * 1e3:.1f} mm from the wellbore "
                            f"wall at {s.get('first_crack_time_s'):.3g} s"
                            + (f"; {rivals}" if (rivals := _rivals(first)) else ""),
-                           reference_text="root", agrees=place == "root" if place else None,
-                           source="the paper's Figs. 10 and 16")
+                           reference_text="root", agrees=_root_cracked(first | {"place": place}),
+                           source="the paper's Figs. 10 and 16",
+                           note=_ROOT_NOTE if first.get("ratio_by_place") else "")
             )  # fmt: skip
         return rows + (stress_at_root(s) if stress else [])
 
