@@ -81,6 +81,19 @@ def test_event_cuts_are_clipped_floored_and_limited():
     assert not c.landed(math.inf)
 
 
+def test_a_jump_after_a_state_change_is_cut_only_when_the_load_could_have_made_it():
+    """No. 4 coarse: a contact switch took the ratio from 0.75 to 1.29 within a 2 s step."""
+    c = StepController(dt=2.0, dt_min=0.01, dt_max=2.0)
+    c.last_ratio = 0.749
+    assert c.overshoot(2.0, 1.291, switched=True) == pytest.approx(2.0 * 0.251 / 0.542)
+    # a loose block: 4e5 at any step, so no cut lands on it (the line puts it at 2e-6)
+    c.broke()
+    c.last_ratio = 0.0
+    assert c.overshoot(0.5, 438433.6, switched=True) is None
+    assert c.event_cuts == 0 and c.step_ratio == pytest.approx(438433.6)
+    assert c.overshoot(0.5, 438433.6) == pytest.approx(0.025)  # no switch: 5 % of the step
+
+
 def test_within_tolerance_or_already_broken_is_not_cut():
     c = StepController(dt=1.0, dt_min=0.1, dt_max=1.0, break_tolerance=0.01)
     assert c.overshoot(1.0, 1.005) is None

@@ -12,6 +12,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+#: the shortest step a cut towards a break asks for, as a fraction of the step cut
+_LEAST_CUT = 0.05
+
 
 @dataclass
 class StepController:
@@ -61,12 +64,16 @@ class StepController:
             return 0.5 * dt
         return None
 
-    def overshoot(self, dt: float, worst: float) -> float | None:
+    def overshoot(self, dt: float, worst: float, switched: bool = False) -> float | None:
         """Return a shorter step that lands on the next break, or None (``worst`` is kept).
 
         ``worst`` is the attempt's worst failure ratio; a step that overshoots 1 by
         more than ``break_tolerance`` is shortened.  The ratio may jump (fluid
         reaching a facet), so after a few cuts the break is taken as it comes.
+        ``switched``: the attempt switched contacts before ``worst``.  A switch can
+        make the ratio jump past 1 within a step; a jump that the line from the last
+        ratio puts in the step's first 5 % is the switch's, not the load's (a loose
+        block: the same jump at any step), and is taken as it comes.
         """
         r0 = self.last_ratio
         if (
@@ -76,9 +83,10 @@ class StepController:
             and self._may_cut(dt)
             and self.event_cuts < self.max_event_cuts
         ):
-            self.event_cuts += 1
             frac = (1.0 - r0) / (worst - r0)
-            return max(dt * min(max(frac, 0.05), 0.9), self.dt_min)
+            if not (switched and frac < _LEAST_CUT):
+                self.event_cuts += 1
+                return max(dt * min(max(frac, _LEAST_CUT), 0.9), self.dt_min)
         self.step_ratio = worst
         return None
 
