@@ -47,6 +47,7 @@ from hfcdem.io.history import HistoryFile
 from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import FieldSeries
 from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solid.interfaces import FacetState
 from hfcdem.solvers import ValidityLimit
 from hfcdem.workflows.observers import (
     CheckpointWriter,
@@ -584,7 +585,7 @@ def _first_crack(
     if frac.first_break_point is not None:
         first = frac.first_break_point
         point[: len(first)] = first
-        where["mode"] = {1: "tensile", 2: "shear"}.get(frac.first_break_mode, "intact")
+        where["mode"] = FacetState(frac.first_break_mode).name.lower()
     else:
         point[:width] = np.asarray(total)[:width] / count
     where = {"point_m": point.tolist()} | where | wellbore_place(scene, point)

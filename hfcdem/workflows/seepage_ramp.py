@@ -46,15 +46,13 @@ from hfcdem.io.history import HistoryFile
 from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import InterfaceFrames
 from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.solid.interfaces import FacetState
 from hfcdem.workflows.places import (
     place_ratios,
     plot_first_crack_stress,
     stress_along_tunnels,
     wellbore_place,
 )
-
-_MODES = {1: "tensile", 2: "shear"}
-
 
 #: the columns of a pumped run's ``history.csv``, one row per step
 PUMPED_COLUMNS = (
@@ -282,7 +280,7 @@ def _first_crack(
     if location is None:
         return None
     point = [*map(float, location), *([0.0] * (3 - len(location)))]
-    where = {"point_m": point, "mode": _MODES.get(int(mode or 0), "intact")}
+    where = {"point_m": point, "mode": FacetState(int(mode or 0)).name.lower()}
     return where | wellbore_place(scene, np.asarray(point)) | (stress or {})
 
 
