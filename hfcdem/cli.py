@@ -155,6 +155,14 @@ def _run(args: argparse.Namespace) -> int:
             f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
         )
         return _exit_code(summary)
+    if _ended_on_first_crack(summary):
+        say(
+            f"{scene.name}: {first_crack_words(summary)}; the run ended there "
+            f'(injection.until = "first crack"), {summary["tensile_failures"]} tensile / '
+            f"{summary['shear_failures']} shear, {summary['wall_time_s']:.1f} s; results in "
+            f"{args.output}/"
+        )
+        return _exit_code(summary)
     if summary.get("kind") == "seepage_pumping":
         fc = summary["first_crack_pressure_MPa"]
         peak = summary["peak_pressure_MPa"]
@@ -179,6 +187,29 @@ def _run(args: argparse.Namespace) -> int:
         f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
     )
     return _exit_code(summary)
+
+
+def _ended_on_first_crack(summary: dict[str, Any]) -> bool:
+    return (
+        summary.get("until") == "first crack"
+        and summary.get("first_crack_pressure_MPa") is not None
+        and summary.get("stopped") is None
+    )
+
+
+def first_crack_words(summary: dict[str, Any]) -> str:
+    """Say a run's first crack: pressure, time, place, distance from the wellbore wall, mode."""
+    first = summary.get("first_crack") or {}
+    said = [
+        f"first crack {summary['first_crack_pressure_MPa']:.2f} MPa at "
+        f"{summary['first_crack_time_s']:.4g} s"
+    ]
+    where = first.get("distance_from_wellbore_wall_m")
+    if first.get("place"):
+        said.append(str(first["place"]))
+    if where is not None:
+        said.append(f"{1e3 * where:.1f} mm from the wellbore wall")
+    return ", ".join(said) + (f" ({first['mode']})" if first.get("mode") else "")
 
 
 def breakdown_words(summary: dict[str, Any]) -> str:

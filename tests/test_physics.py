@@ -78,6 +78,9 @@ def test_cavity_options():
     assert (phys.wellbore, phys.wall_joints) == ("open", "wet")
     assert phys.wall_film == pytest.approx(5e-6)
     assert scene(injection__wellbore="drilled").physics.wellbore == "drilled"
+    # where a run ends is a run-control choice, not an assumption to list
+    assert phys.until == "end" and "injection.until" not in phys.defaulted
+    assert scene(injection__until="first crack").physics.until == "first crack"
 
 
 @pytest.mark.parametrize(
@@ -98,6 +101,8 @@ def test_cavity_options():
         ({"injection__wall_film": "0 um"}, "injection.wall_film"),
         ({"injection__wall_film": 5e-6}, "injection.wall_film"),  # a number without unit
         ({"injection__wall_joints": "damp"}, "injection.wall_joints"),
+        ({"injection__until": "breakdown"}, "injection.until"),
+        ({"injection__until": True}, "injection.until"),
         ({"solver__linear_solver": "lu"}, "solver.linear_solver"),
         ({"solver__solid": "partial"}, "solver.solid"),
         ({"solver__solid": "reduced", "solver__degree": 2}, "solver.solid"),

@@ -50,6 +50,7 @@ def test_distances_are_across_the_wellbore_axis():
     assert wellbore_place(scene, np.array([0.35, 1.0, 0.0])) == {
         "distance_from_wellbore_wall_m": pytest.approx(0.25),
         "place": "middle",
+        "fraction_of_tunnel": pytest.approx(0.25 / 0.6),
     }
     plate = SimpleNamespace(geometry=SimpleNamespace())
     assert wall_distances(plate, np.zeros((1, 3))) is None

@@ -331,6 +331,22 @@ def test_the_first_break_is_announced_once_in_its_step(plate):
     assert seen[0][2] >= 1.0  # the facets that broke were at their strength
 
 
+def test_a_run_until_its_first_break_ends_on_the_step_of_the_full_runs_first_break(plate):
+    """``until_first_break``: the same first break as the run to the end, no breakdown."""
+    fluid = Fluid(viscosity=1.0)
+    full = pump_with_seepage(_solid(plate), WALL, fluid, 1e-9, CavityPumping(Q, 40.0, steps=100))
+    pumping = CavityPumping(Q, 40.0, steps=100, until_first_break=True)
+    first = pump_with_seepage(_solid(plate), WALL, fluid, 1e-9, pumping)
+    assert first.ended_on_first_break and not full.ended_on_first_break
+    assert first.first_time == full.first_time and first.first_pressure == full.first_pressure
+    assert np.array_equal(first.first_location, full.first_location)
+    assert first.history[-1][0] == first.first_time < full.history[-1][0]
+    assert first.breakdown is None and full.breakdown is not None
+    assert not first.peak_cut_off and first.stopped is None
+    with pytest.raises(ValueError, match="until_first_break"):
+        CavityPumping(Q, 40.0, until_first_break="yes")
+
+
 def test_quiet_steps_grow_up_to_max_dt_and_breaks_go_back_to_the_base_step(plate):
     """The sealed cavity's linear rise grows its steps; the breaks land where fixed ones do.
 

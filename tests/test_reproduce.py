@@ -222,6 +222,13 @@ def test_a_first_crack_row_says_where_its_step_broke_and_how_near_the_rest_came(
         CaseResult(tmp_path, (), summary=summary | {"first_crack": alone})
     )
     assert row.ours_text == "far end, 153.9 mm from the wellbore wall at 53.1 s"
+    # the distance as a share of the tunnel shows how near the thirds' line it lies
+    shared = alone | {"fraction_of_tunnel": 0.6691}
+    _, row = peak_against("p", 64.01, "s", 0.1)(
+        CaseResult(tmp_path, (), summary=summary | {"first_crack": shared})
+    )
+    assert row.ours_text == "far end, 153.9 mm from the wellbore wall (0.67 L) at 53.1 s"
+    assert "0.67 L" in row.note
     both = first | {"ratio_by_place": {"root": 1.02, "far end": 1.3}}
     _, row = peak_against("p", 64.01, "s", 0.1)(
         CaseResult(tmp_path, (), summary=summary | {"first_crack": both})
@@ -401,6 +408,9 @@ def test_first_cracks_of_the_four_charges_against_the_root(tmp_path):
     rows = ({"value": "no1", "first_crack": rows[0]["first_crack"] | near},)
     (row,) = first_cracks(CaseResult(tmp_path, (), rows=rows))
     assert row.ours_text == "0 of 1: No. 1 far end (157 mm, root at 0.87)" and row.met is False
+    shared = rows[0]["first_crack"] | {"fraction_of_tunnel": 0.68}
+    (row,) = first_cracks(CaseResult(tmp_path, (), rows=({"value": "no1", "first_crack": shared},)))
+    assert row.ours_text == "0 of 1: No. 1 far end (157 mm, 0.68 L, root at 0.87)"
     # No. 4 coarse: a step that did not land broke the far end (1.29) and the root (1.10)
     both = {"ratio_by_place": {"root": 1.101, "far end": 1.291}}
     rows = ({"value": "no4", "first_crack": rows[0]["first_crack"] | both},)

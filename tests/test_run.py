@@ -87,6 +87,29 @@ def test_borehole_scene_breaks_at_the_wall_near_hubbert_willis(shared_tmp_path):
     assert solved >= summary["rebuilds"] - reused
 
 
+def test_a_run_until_its_first_crack_ends_there_with_the_full_runs_first_crack(
+    shared_tmp_path, capsys
+):
+    """``injection.until = "first crack"``: the run to the end's first crack, and no more."""
+    full = run_scene(load_scene(BOREHOLE, "coarse"), shared_tmp_path / "bh_full")
+    out = shared_tmp_path / "bh_first"
+    code = main(
+        ["run", BOREHOLE, "--resolution", "coarse", "-o", str(out), "--set",
+         'injection.until="first crack"']
+    )  # fmt: skip
+    assert code == 0
+    assert 'the run ended there (injection.until = "first crack")' in capsys.readouterr().out
+    first = json.loads((out / "summary.json").read_text())
+    for key in ("first_crack_time_s", "first_crack_pressure_MPa"):
+        assert first[key] == full[key], key
+    assert first["first_crack"]["point_m"] == full["first_crack"]["point_m"]
+    assert first["simulated_time_s"] == first["first_crack_time_s"] < full["simulated_time_s"]
+    assert first["steps"] < full["steps"] and first["until"] == "first crack"
+    assert first["breakdown_pressure_MPa"] is None
+    assert "ended on its first crack" in first["breakdown_note"]
+    assert "first crack" not in (full["breakdown_note"] or "")
+
+
 def test_the_reduced_solid_reproduces_the_full_borehole_run(shared_tmp_path):
     """``solver.solid = "reduced"`` against the full-DG reference, coarse borehole scene.
 

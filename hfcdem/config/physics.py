@@ -49,6 +49,9 @@ them so a run's record can print what was assumed.  Any invalid field raises
     joint_pressure = "30 MPa"   # seepage, pumped: the zone's joints start full at this pore
                                 # pressure (left out: they start dry)
     rigid_cavity = false        # true: the stored volume ignores the wall motion
+    until = "end"               # or "first crack": end the run on the step that breaks the
+                                # first interface (where and at what pressure the rock
+                                # starts to crack, without the cascade after it)
 
     [load]                      # instead of [injection]: one static solve
     crack_pressure = "22 MPa"   # on the faces of the pre-existing crack (tag 'crack');
@@ -126,6 +129,8 @@ WALL_JOINTS = ("dry", "wet", "permeated", "seepage")
 # after (the wall keeps that pressure and the stress around the hole it made; the casing
 # carries the pumping); "open", the wall takes the pumped pressure
 WELLBORES = ("cased", "drilled", "open")
+# where an injection run ends: at its duration, or on the step of its first crack
+UNTIL = ("end", "first crack")
 PHYSICS_SECTIONS = ("rock", "stress", "fluid", "injection", "load", "solver", "output")
 
 # in-situ stresses below this are almost surely MPa values typed with "Pa"
@@ -201,6 +206,7 @@ class Physics:
     joint_reference_size: float | None = None  # m, cell size at which joint_aperture holds
     pressure_step: float | None = None  # Pa per step of a seepage ramp (None: time_step)
     rigid_cavity: bool = False
+    until: str = "end"  # or "first crack" (UNTIL)
     output_interval: float | None = None  # None: duration / 20
     pictures: bool = True
     load: StaticLoad | None = None
@@ -394,6 +400,7 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
         load: StaticLoad | None = StaticLoad(pressure)
         injection, duration, p0, extra, wellbore = None, 0.0, 0.0, 0.0, "cased"
         film, joints, rigid, pressure_step, wet = None, "dry", False, None, None
+        until = "end"
     else:
         load = None
         inj = r.section("injection")
@@ -409,6 +416,8 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
         _check(extra >= 0.0, "injection.extra_volume", f"must be >= 0 m3, got {extra!r}")
         # perforated wells are cased: only the tunnels are open hole
         wellbore = r.get(inj, "wellbore", "string", (Physics, "wellbore"), choices=WELLBORES)
+        # a run-control choice, not a physical assumption: not listed among the defaults
+        until = inj.string("until", field_default(Physics, "until"), choices=UNTIL)
         film = inj.quantity("wall_film", "length") if inj.has("wall_film") else None
         joints = r.get(
             inj,
@@ -451,6 +460,7 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
         "joint_pressure": wet,
         "pressure_step": pressure_step,
         "rigid_cavity": rigid,
+        "until": until,
         "load": load,
     }
 

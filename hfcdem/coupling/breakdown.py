@@ -109,6 +109,12 @@ def peak_is_lower_bound(peak: float, breakdown: float | None, validity_limit: bo
     return validity_limit and (breakdown is None or breakdown < peak * (1.0 - 1e-9))
 
 
+#: the note of a run that ended on its first crack (``injection.until = "first crack"``)
+FIRST_CRACK_END = (
+    'the run ended on its first crack (injection.until = "first crack"): no breakdown sought'
+)
+
+
 def breakdown_note(
     pressures: Sequence[float],
     found: Breakdown | None,
@@ -153,6 +159,7 @@ def breakdown_note(
 
 
 __all__ = [
+    "FIRST_CRACK_END",
     "Breakdown",
     "breakdown_note",
     "detect_breakdown",

@@ -110,7 +110,9 @@ class CavityPumping:
     overstressed at the step's end break then, at most a step late).
     ``landing_tolerance``: a step lands only when it moved the cavity pressure
     by more than this fraction of it, so a break that is not landed is off by
-    about that fraction at most (0: every step lands).
+    about that fraction at most (0: every step lands).  ``until_first_break``:
+    end the run after the step of the first break (the pumping's first crack,
+    without the cascade after it).
     """
 
     rate: float
@@ -122,6 +124,7 @@ class CavityPumping:
     land_on_breaks: bool = True
     landing_tolerance: float = 0.0
     joint_pressure: float | None = None
+    until_first_break: bool = False
 
     def __post_init__(self) -> None:
         for name in ("rate", "duration", "initial_pressure", "extra_volume"):
@@ -141,10 +144,11 @@ class CavityPumping:
             raise ValueError(
                 f"CavityPumping.steps must be an integer in [1, 1e7], got {self.steps!r}"
             )
-        if not isinstance(self.land_on_breaks, bool):
-            raise ValueError(
-                f"CavityPumping.land_on_breaks must be True or False, got {self.land_on_breaks!r}"
-            )
+        for name in ("land_on_breaks", "until_first_break"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(
+                    f"CavityPumping.{name} must be True or False, got {getattr(self, name)!r}"
+                )
         if not 0.0 <= self.landing_tolerance <= 1.0:
             raise ValueError(
                 "CavityPumping.landing_tolerance must be a fraction in [0, 1], got "

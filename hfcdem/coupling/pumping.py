@@ -174,7 +174,9 @@ class PumpingResult:
     correction of the kept factor instead (:mod:`hfcdem.solid.lowrank`);
     ``costs`` rows, one per step, of :data:`COST_COLUMNS`: where the run spent
     its solves and seconds (the seconds are each rank's own, the counts the
-    same on every rank).
+    same on every rank); ``ended_on_first_break``: the run ended after its first
+    break as asked (``CavityPumping.until_first_break``), so no breakdown was
+    sought.
     """
 
     first_pressure: float | None
@@ -204,6 +206,7 @@ class PumpingResult:
     factorisations: int = 0
     low_rank_events: int = 0
     costs: list[tuple[float, ...]] = field(default_factory=list)
+    ended_on_first_break: bool = False
 
 
 def pump_with_seepage(
@@ -838,6 +841,10 @@ class _PumpedCavity:
                 curve_p.append(top)
             curve_t.append(t)
             curve_p.append(self.p)
+            if pumping.until_first_break and first is not None:
+                if progress is not None:
+                    progress(f"  t {t:.4g} s: the first break; the run ends here (until)")
+                break
             if progress is not None:
                 for news in self.debris_news:
                     progress(news)
@@ -850,9 +857,11 @@ class _PumpedCavity:
                 )
         counts = solid.broken_counts()
         pj, sat = self.fields()
-        # a fall before the first break is the joints' intake, not a breakdown
+        # a fall before the first break is the joints' intake, not a breakdown; a run
+        # ended on its first break seeks none
+        ended = pumping.until_first_break and first is not None
         breakdown = detect_breakdown(
-            curve_t, curve_p, not_before=math.inf if first is None else first[1]
+            curve_t, curve_p, not_before=math.inf if first is None or ended else first[1]
         )
         return PumpingResult(
             first_pressure=None if first is None else first[0],
@@ -864,7 +873,7 @@ class _PumpedCavity:
             breakdown_drop=None if breakdown is None else breakdown.drop,
             peak_pressure=peak,
             peak_time=peak_time,
-            peak_cut_off=breakdown is None and peak_time > 0.0,
+            peak_cut_off=breakdown is None and peak_time > 0.0 and not ended,
             initial_failures=initial_failures,
             steps=n,
             history=history,
@@ -882,6 +891,7 @@ class _PumpedCavity:
             factorisations=self._factorisations()[0] - self.factorisations_before[0],
             low_rank_events=self._factorisations()[1] - self.factorisations_before[1],
             costs=costs,
+            ended_on_first_break=ended,
         )
 
 

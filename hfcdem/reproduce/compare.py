@@ -604,16 +604,34 @@ def _root_cracked(first: Mapping[str, Any]) -> bool | None:
     return place == "root" or (root is not None and root >= 1.0)
 
 
+def _fraction(first: Mapping[str, Any], scene: Scene | None) -> str:
+    """Say the first crack's distance as a fraction of the tunnel (", 0.67 L"; "" if unknown).
+
+    Summaries from before the fraction was recorded get it from the scene.
+    """
+    fraction = first.get("fraction_of_tunnel")
+    where = first.get("distance_from_wellbore_wall_m")
+    length = tunnel_length(scene) if fraction is None and scene is not None else None
+    if fraction is None and where is not None and length:
+        fraction = where / length
+    return f", {fraction:.2f} L" if fraction is not None else ""
+
+
+#: how the rows give a distance as a share of the tunnel
+_FRACTION_NOTE = "L: the tunnel's length (the thirds' lines at 0.33 L and 0.67 L)"
+
+
 def first_cracks(r: CaseResult) -> list[Comparison]:
     """Where each case's first crack is, against the paper's root (Fig. 16), as one row."""
     places = []
-    for row in r.rows:
+    for k, row in enumerate(r.rows):
         first = row.get("first_crack") or {}
         where, place = first.get("distance_from_wellbore_wall_m"), first.get("place")
         root = (first.get("ratio_by_place") or {}).get("root")
         if where is not None and place is not None:
             near = f", root at {root:.2f}" if root is not None and place != "root" else ""
-            shown = f"{place} ({1e3 * where:.0f} mm{near})"
+            scene = r.scenes[k] if k < len(r.scenes) else None
+            shown = f"{place} ({1e3 * where:.0f} mm{_fraction(first, scene)}{near})"
             places.append((_shown(str(row["value"])), shown, bool(_root_cracked(first))))
     if not places:
         return []
@@ -624,7 +642,7 @@ def first_cracks(r: CaseResult) -> list[Comparison]:
                    ours_text=f"{roots} of {len(places)}: {listed}", reference_text="every one",
                    agrees=roots == len(places), source="the paper's Fig. 16",
                    note="distance from the wellbore wall; the tunnel's thirds: root, middle, "
-                   f"far end; {_ROOT_NOTE}")
+                   f"far end; {_FRACTION_NOTE}; {_ROOT_NOTE}")
     ]  # fmt: skip
 
 
@@ -875,14 +893,17 @@ def peak_against(
         if place is None and where is not None and length:  # a summary from before places
             place = tunnel_place(where, length)
         if where is not None:
+            share = _fraction(first, r.scenes[0] if r.scenes else None)
+            share = f" ({share[2:]})" if share else ""
             rows.append(
                 Comparison("first crack place", where * 1e3,
                            ours_text=f"{place or ''}, {where * 1e3:.1f} mm from the wellbore "
-                           f"wall at {s.get('first_crack_time_s'):.3g} s"
+                           f"wall{share} at {s.get('first_crack_time_s'):.3g} s"
                            + (f"; {rivals}" if (rivals := _rivals(first)) else ""),
                            reference_text="root", agrees=_root_cracked(first | {"place": place}),
                            source="the paper's Figs. 10 and 16",
-                           note=_ROOT_NOTE if first.get("ratio_by_place") else "")
+                           note=f"{_FRACTION_NOTE}"
+                           + (f"; {_ROOT_NOTE}" if first.get("ratio_by_place") else ""))
             )  # fmt: skip
         return rows + (stress_at_root(s) if stress else [])
 

@@ -54,7 +54,9 @@ def wellbore_place(scene: Scene, point: np.ndarray) -> dict[str, Any]:
     """Return a point's ``distance_from_wellbore_wall_m`` and, with tunnels, its ``place``.
 
     The distance is measured across the wellbore axis (0 at a perforation root);
-    nothing without a wellbore.
+    nothing without a wellbore.  With tunnels also ``fraction_of_tunnel``: the
+    distance over the tunnels' length (1 at the tip), so a point near a line
+    between two places shows as such (the thirds' lines at 1/3 and 2/3).
     """
     distances = wall_distances(scene, np.asarray(point)[None, :])
     if distances is None:
@@ -64,6 +66,7 @@ def wellbore_place(scene: Scene, point: np.ndarray) -> dict[str, Any]:
     length = tunnel_length(scene)
     if length is not None:
         out["place"] = tunnel_place(distance, length)
+        out["fraction_of_tunnel"] = distance / length
     return out
 
 

@@ -34,7 +34,7 @@ from mpi4py import MPI
 
 from hfcdem.config.geometry import Scene
 from hfcdem.config.tables import SceneError
-from hfcdem.coupling.breakdown import breakdown_note, detect_breakdown
+from hfcdem.coupling.breakdown import FIRST_CRACK_END, breakdown_note, detect_breakdown
 from hfcdem.coupling.hydrofrac import (
     FlowSettings,
     HydraulicFracture,
@@ -349,11 +349,13 @@ def _run_coupled(
         ProgressLine(say, t_end),
         *observers,
     ]
-    stopped, limit = _step_until(frac, t_end, watchers, say)
+    at_first = phys.until == "first crack"
+    stopped, limit = _step_until(frac, t_end, watchers, say, at_first)
     # the curve starts from the initial state, so the rise to the peak is measured from it
     times = [0.0] + [r.time for r in frac.history]
     pressures = [phys.initial_pressure] + [r.injection_pressure for r in frac.history]
-    found = detect_breakdown(times, pressures)
+    # a run ended on its first crack has no breakdown to seek: no drop can follow
+    found = None if ended_on_first_crack(frac, phys) else detect_breakdown(times, pressures)
     points, data = frac.facet_fields()
     write_interfaces(out / "fracture.vtu", points, data, comm)
     summary = _summarise(scene, frac, found, pressures, first, stopped, limit) | record()
@@ -389,8 +391,12 @@ def _summarise(
         "breakdown_time_s": found.time if found else None,
         # how far the pressure fell after it: a dip near the threshold is a fragile answer
         "breakdown_drop_MPa": found.drop / 1e6 if found else None,
-        "breakdown_note": breakdown_note(
-            pressures, found, "crack" in solid.tmesh.facet_names, validity_limit=limit
+        "breakdown_note": (
+            FIRST_CRACK_END
+            if ended_on_first_crack(frac, scene.physics) and not stopped
+            else breakdown_note(
+                pressures, found, "crack" in solid.tmesh.facet_names, validity_limit=limit
+            )
         ),
         "peak_pressure_MPa": max(pressures) / 1e6 if pressures else None,
         "first_crack_time_s": frac.first_break_time,
@@ -424,7 +430,13 @@ def _summarise(
         "max_mass_error": max((r.mass_error for r in frac.history), default=0.0),
         "stopped": stopped,
         "validity_limit": limit,
+        "until": scene.physics.until,
     }
+
+
+def ended_on_first_crack(frac: HydraulicFracture, phys: Any) -> bool:
+    """Whether a run ended on its first crack as its scene asked (``injection.until``)."""
+    return phys.until == "first crack" and frac.first_break_time is not None
 
 
 def _inlet_answers(scene: Scene, frac: HydraulicFracture) -> dict[str, Any]:
@@ -480,11 +492,13 @@ def _step_until(
     t_end: float,
     watchers: Sequence[StepObserver],
     say: Callable[[str], None],
+    at_first_crack: bool = False,
 ) -> tuple[str | None, bool]:
-    """Step to ``t_end``, handing each record to the observers.
+    """Step to ``t_end`` (or, ``at_first_crack``, to the step of the first crack).
 
-    Returns why it stopped (None: it reached ``t_end``) and whether that was
-    the model's validity limit (:class:`ValidityLimit`) rather than a failure.
+    Each record goes to the observers.  Returns why it stopped (None: it
+    reached its planned end) and whether that was the model's validity limit
+    (:class:`ValidityLimit`) rather than a failure.
     """
     stopped, limit = None, False
     for w in watchers:
@@ -501,6 +515,9 @@ def _step_until(
                 )
             for w in watchers:
                 w.step(frac, rec)
+            if at_first_crack and frac.first_break_time is not None:
+                say(f"  t {rec.time:.4g} s: the first crack; the run ends here (injection.until)")
+                break
     except SimulationStopped as exc:
         stopped, limit = str(exc), isinstance(exc, ValidityLimit)
         say(f"{'ended at the validity limit of the model' if limit else 'stopped'}: {exc}")

@@ -38,7 +38,7 @@ from mpi4py import MPI
 from hfcdem.config.physics import Physics
 from hfcdem.config.scene import Scene
 from hfcdem.config.tables import SceneError
-from hfcdem.coupling.breakdown import peak_is_lower_bound
+from hfcdem.coupling.breakdown import FIRST_CRACK_END, peak_is_lower_bound
 from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakdown
 from hfcdem.coupling.pumping import COST_COLUMNS, PumpingResult, pump_with_seepage
 from hfcdem.io.files import write_csv, write_interfaces, write_json
@@ -107,6 +107,7 @@ def seepage_loading(scene: Scene) -> PressureRamp | CavityPumping:
                 phys.solver.break_tolerance if phys.solver.break_landing == "tolerance" else 0.0
             ),
             joint_pressure=phys.joint_pressure,
+            until_first_break=phys.until == "first crack",
         )
     if phys.joint_pressure is not None:
         raise SceneError(
@@ -381,6 +382,7 @@ def _run_pumped(
         "steps": result.steps,
         "stopped": result.stopped,
         "validity_limit": result.validity_limit,
+        "until": phys.until,
     } | record()
     write_json(out / "summary.json", summary, comm)
     if comm.rank == 0 and result.history:
@@ -419,6 +421,8 @@ def pumping_note(result: PumpingResult) -> str | None:
     breakdown from below (:func:`hfcdem.coupling.breakdown.peak_is_lower_bound`,
     the rule of the other rungs and of the report).
     """
+    if result.ended_on_first_break:
+        return FIRST_CRACK_END
     cut_short = peak_is_lower_bound(result.peak_pressure, result.breakdown, result.validity_limit)
     if result.breakdown is not None:
         if not cut_short:
