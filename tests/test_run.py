@@ -108,6 +108,16 @@ def test_a_run_until_its_first_crack_ends_there_with_the_full_runs_first_crack(
     assert first["breakdown_pressure_MPa"] is None
     assert "ended on its first crack" in first["breakdown_note"]
     assert "first crack" not in (full["breakdown_note"] or "")
+    # resumed as it was, it stays at its first crack; resumed without until, it goes on
+    args = ["run", BOREHOLE, "--resolution", "coarse", "-o", str(out), "--resume"]
+    assert main([*args, "--set", 'injection.until="first crack"']) == 0
+    again = json.loads((out / "summary.json").read_text())
+    assert again["steps"] == first["steps"]
+    assert main([*args, "--force"]) == 0
+    on = json.loads((out / "summary.json").read_text())
+    assert on["simulated_time_s"] == pytest.approx(full["simulated_time_s"])
+    assert on["first_crack_pressure_MPa"] == full["first_crack_pressure_MPa"]
+    assert on["peak_pressure_MPa"] == pytest.approx(full["peak_pressure_MPa"], rel=1e-9)
 
 
 def test_the_reduced_solid_reproduces_the_full_borehole_run(shared_tmp_path):

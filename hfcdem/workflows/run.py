@@ -505,6 +505,8 @@ def _step_until(
         w.start(frac)
     try:
         while frac.t < t_end * (1.0 - 1e-12):
+            if at_first_crack and frac.first_break_time is not None:  # e.g. a resumed run
+                break
             frac.dt = min(frac.dt, t_end - frac.t)
             debris = frac.debris_cells
             rec = frac.step()
