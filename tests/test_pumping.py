@@ -338,8 +338,10 @@ def test_a_run_until_its_first_break_ends_on_the_step_of_the_full_runs_first_bre
     pumping = CavityPumping(Q, 40.0, steps=100, until_first_break=True)
     first = pump_with_seepage(_solid(plate), WALL, fluid, 1e-9, pumping)
     assert first.ended_on_first_break and not full.ended_on_first_break
-    assert first.first_time == full.first_time and first.first_pressure == full.first_pressure
-    assert np.array_equal(first.first_location, full.first_location)
+    # the same run up to there (bitwise on one rank; two ranks sum in varying order)
+    assert first.first_time == pytest.approx(full.first_time, rel=1e-9)
+    assert first.first_pressure == pytest.approx(full.first_pressure, rel=1e-9)
+    assert np.allclose(first.first_location, full.first_location)
     assert first.history[-1][0] == first.first_time < full.history[-1][0]
     assert first.breakdown is None and full.breakdown is not None
     assert not first.peak_cut_off and first.stopped is None

@@ -98,11 +98,14 @@ def test_a_run_until_its_first_crack_ends_there_with_the_full_runs_first_crack(
          'injection.until="first crack"']
     )  # fmt: skip
     assert code == 0
-    assert 'the run ended there (injection.until = "first crack")' in capsys.readouterr().out
+    if MPI.COMM_WORLD.rank == 0:  # the last line is printed on rank 0
+        said = capsys.readouterr().out
+        assert 'the run ended there (injection.until = "first crack")' in said
     first = json.loads((out / "summary.json").read_text())
+    # the same run up to there (bitwise on one rank; two ranks sum in varying order)
     for key in ("first_crack_time_s", "first_crack_pressure_MPa"):
-        assert first[key] == full[key], key
-    assert first["first_crack"]["point_m"] == full["first_crack"]["point_m"]
+        assert first[key] == pytest.approx(full[key], rel=1e-9), key
+    assert np.allclose(first["first_crack"]["point_m"], full["first_crack"]["point_m"])
     assert first["simulated_time_s"] == first["first_crack_time_s"] < full["simulated_time_s"]
     assert first["steps"] < full["steps"] and first["until"] == "first crack"
     assert first["breakdown_pressure_MPa"] is None
@@ -116,7 +119,9 @@ def test_a_run_until_its_first_crack_ends_there_with_the_full_runs_first_crack(
     assert main([*args, "--force"]) == 0
     on = json.loads((out / "summary.json").read_text())
     assert on["simulated_time_s"] == pytest.approx(full["simulated_time_s"])
-    assert on["first_crack_pressure_MPa"] == full["first_crack_pressure_MPa"]
+    assert on["first_crack_pressure_MPa"] == pytest.approx(
+        full["first_crack_pressure_MPa"], rel=1e-9
+    )
     assert on["peak_pressure_MPa"] == pytest.approx(full["peak_pressure_MPa"], rel=1e-9)
 
 
