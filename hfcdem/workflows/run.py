@@ -33,6 +33,7 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem.config.geometry import Scene
+from hfcdem.config.physics import Physics
 from hfcdem.config.tables import SceneError
 from hfcdem.coupling.breakdown import FIRST_CRACK_END, breakdown_note, detect_breakdown
 from hfcdem.coupling.hydrofrac import (
@@ -355,7 +356,7 @@ def _run_coupled(
     times = [0.0] + [r.time for r in frac.history]
     pressures = [phys.initial_pressure] + [r.injection_pressure for r in frac.history]
     # a run ended on its first crack has no breakdown to seek: no drop can follow
-    found = None if ended_on_first_crack(frac, phys) else detect_breakdown(times, pressures)
+    found = None if _ended_on_first_crack(frac, phys) else detect_breakdown(times, pressures)
     points, data = frac.facet_fields()
     write_interfaces(out / "fracture.vtu", points, data, comm)
     summary = _summarise(scene, frac, found, pressures, first, stopped, limit) | record()
@@ -393,7 +394,7 @@ def _summarise(
         "breakdown_drop_MPa": found.drop / 1e6 if found else None,
         "breakdown_note": (
             FIRST_CRACK_END
-            if ended_on_first_crack(frac, scene.physics) and not stopped
+            if _ended_on_first_crack(frac, scene.physics) and not stopped
             else breakdown_note(
                 pressures, found, "crack" in solid.tmesh.facet_names, validity_limit=limit
             )
@@ -434,7 +435,7 @@ def _summarise(
     }
 
 
-def ended_on_first_crack(frac: HydraulicFracture, phys: Any) -> bool:
+def _ended_on_first_crack(frac: HydraulicFracture, phys: Physics) -> bool:
     """Whether a run ended on its first crack as its scene asked (``injection.until``)."""
     return phys.until == "first crack" and frac.first_break_time is not None
 
