@@ -222,6 +222,7 @@ def test_a_first_crack_row_says_where_its_step_broke_and_how_near_the_rest_came(
         CaseResult(tmp_path, (), summary=summary | {"first_crack": alone})
     )
     assert row.ours_text == "far end, 153.9 mm from the wellbore wall at 53.1 s"
+    assert "the tunnel's length" not in row.note  # no share shown, none explained
     # the distance as a share of the tunnel shows how near the thirds' line it lies
     shared = alone | {"fraction_of_tunnel": 0.6691}
     _, row = peak_against("p", 64.01, "s", 0.1)(

@@ -902,8 +902,9 @@ def peak_against(
                            + (f"; {rivals}" if (rivals := _rivals(first)) else ""),
                            reference_text="root", agrees=_root_cracked(first | {"place": place}),
                            source="the paper's Figs. 10 and 16",
-                           note=f"{_FRACTION_NOTE}"
-                           + (f"; {_ROOT_NOTE}" if first.get("ratio_by_place") else ""))
+                           note="; ".join(
+                               ([_FRACTION_NOTE] if share else [])
+                               + ([_ROOT_NOTE] if first.get("ratio_by_place") else [])))
             )  # fmt: skip
         return rows + (stress_at_root(s) if stress else [])
 
