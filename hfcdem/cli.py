@@ -117,6 +117,7 @@ def _run(args: argparse.Namespace) -> int:
 
     from hfcdem.config.scene import load_scene
     from hfcdem.config.units import FieldError
+    from hfcdem.coupling.breakdown import FIRST_CRACK_END
     from hfcdem.mesh.tagged import MeshingError
     from hfcdem.workflows.run import OutputInUse, run_scene
 
@@ -155,7 +156,7 @@ def _run(args: argparse.Namespace) -> int:
             f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
         )
         return _exit_code(summary)
-    if _ended_on_first_crack(summary):
+    if summary.get("breakdown_note") == FIRST_CRACK_END:  # injection.until = "first crack"
         say(
             f"{scene.name}: {first_crack_words(summary)}; the run ended there "
             f'(injection.until = "first crack"), {summary["tensile_failures"]} tensile / '
@@ -187,14 +188,6 @@ def _run(args: argparse.Namespace) -> int:
         f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
     )
     return _exit_code(summary)
-
-
-def _ended_on_first_crack(summary: dict[str, Any]) -> bool:
-    return (
-        summary.get("until") == "first crack"
-        and summary.get("first_crack_pressure_MPa") is not None
-        and summary.get("stopped") is None
-    )
 
 
 def first_crack_words(summary: dict[str, Any]) -> str:

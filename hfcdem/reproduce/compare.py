@@ -604,17 +604,17 @@ def _root_cracked(first: Mapping[str, Any]) -> bool | None:
     return place == "root" or (root is not None and root >= 1.0)
 
 
-def _fraction(first: Mapping[str, Any], scene: Scene | None) -> str:
-    """Say the first crack's distance as a fraction of the tunnel (", 0.67 L"; "" if unknown).
+def _share(first: Mapping[str, Any], scene: Scene | None) -> str:
+    """Say the first crack's distance as a share of the tunnel ("0.67 L"; "" if unknown).
 
-    Summaries from before the fraction was recorded get it from the scene.
+    Summaries from before the share was recorded get it from the scene.
     """
-    fraction = first.get("fraction_of_tunnel")
+    share = first.get("fraction_of_tunnel")
     where = first.get("distance_from_wellbore_wall_m")
-    length = tunnel_length(scene) if fraction is None and scene is not None else None
-    if fraction is None and where is not None and length:
-        fraction = where / length
-    return f", {fraction:.2f} L" if fraction is not None else ""
+    length = tunnel_length(scene) if share is None and scene is not None else None
+    if share is None and where is not None and length:
+        share = where / length
+    return f"{share:.2f} L" if share is not None else ""
 
 
 #: how the rows give a distance as a share of the tunnel
@@ -631,7 +631,8 @@ def first_cracks(r: CaseResult) -> list[Comparison]:
         if where is not None and place is not None:
             near = f", root at {root:.2f}" if root is not None and place != "root" else ""
             scene = r.scenes[k] if k < len(r.scenes) else None
-            shown = f"{place} ({1e3 * where:.0f} mm{_fraction(first, scene)}{near})"
+            share = _share(first, scene)
+            shown = f"{place} ({1e3 * where:.0f} mm{', ' + share if share else ''}{near})"
             places.append((_shown(str(row["value"])), shown, bool(_root_cracked(first))))
     if not places:
         return []
@@ -893,12 +894,12 @@ def peak_against(
         if place is None and where is not None and length:  # a summary from before places
             place = tunnel_place(where, length)
         if where is not None:
-            share = _fraction(first, r.scenes[0] if r.scenes else None)
-            share = f" ({share[2:]})" if share else ""
+            share = _share(first, r.scenes[0] if r.scenes else None)
             rows.append(
                 Comparison("first crack place", where * 1e3,
                            ours_text=f"{place or ''}, {where * 1e3:.1f} mm from the wellbore "
-                           f"wall{share} at {s.get('first_crack_time_s'):.3g} s"
+                           f"wall{f' ({share})' if share else ''} at "
+                           f"{s.get('first_crack_time_s'):.3g} s"
                            + (f"; {rivals}" if (rivals := _rivals(first)) else ""),
                            reference_text="root", agrees=_root_cracked(first | {"place": place}),
                            source="the paper's Figs. 10 and 16",

@@ -33,7 +33,6 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem.config.geometry import Scene
-from hfcdem.config.physics import Physics
 from hfcdem.config.tables import SceneError
 from hfcdem.coupling.breakdown import FIRST_CRACK_END, breakdown_note, detect_breakdown
 from hfcdem.coupling.hydrofrac import (
@@ -355,11 +354,12 @@ def _run_coupled(
     # the curve starts from the initial state, so the rise to the peak is measured from it
     times = [0.0] + [r.time for r in frac.history]
     pressures = [phys.initial_pressure] + [r.injection_pressure for r in frac.history]
-    # a run ended on its first crack has no breakdown to seek: no drop can follow
-    found = None if _ended_on_first_crack(frac, phys) else detect_breakdown(times, pressures)
+    # a run ended on its first crack as asked has no breakdown to seek: no drop can follow
+    ended = at_first and stopped is None and frac.first_break_time is not None
+    found = None if ended else detect_breakdown(times, pressures)
     points, data = frac.facet_fields()
     write_interfaces(out / "fracture.vtu", points, data, comm)
-    summary = _summarise(scene, frac, found, pressures, first, stopped, limit) | record()
+    summary = _summarise(scene, frac, found, pressures, first, stopped, limit, ended) | record()
     summary |= _inlet_answers(scene, frac)
     # closed form: the walls' largest tension under the in-situ stress alone
     summary["in_situ_wall_tension"] = [w.as_dict() for w in walls]
@@ -382,6 +382,7 @@ def _summarise(
     first: FirstCrack,
     stopped: str | None,
     limit: bool,
+    ended_on_first_crack: bool = False,
 ) -> dict[str, Any]:
     """Collect the answers of a coupled run for ``summary.json``."""
     solid = frac.solid
@@ -394,7 +395,7 @@ def _summarise(
         "breakdown_drop_MPa": found.drop / 1e6 if found else None,
         "breakdown_note": (
             FIRST_CRACK_END
-            if _ended_on_first_crack(frac, scene.physics) and not stopped
+            if ended_on_first_crack
             else breakdown_note(
                 pressures, found, "crack" in solid.tmesh.facet_names, validity_limit=limit
             )
@@ -433,11 +434,6 @@ def _summarise(
         "validity_limit": limit,
         "until": scene.physics.until,
     }
-
-
-def _ended_on_first_crack(frac: HydraulicFracture, phys: Physics) -> bool:
-    """Whether a run ended on its first crack as its scene asked (``injection.until``)."""
-    return phys.until == "first crack" and frac.first_break_time is not None
 
 
 def _inlet_answers(scene: Scene, frac: HydraulicFracture) -> dict[str, Any]:
@@ -506,7 +502,8 @@ def _step_until(
         w.start(frac)
     try:
         while frac.t < t_end * (1.0 - 1e-12):
-            if at_first_crack and frac.first_break_time is not None:  # e.g. a resumed run
+            if at_first_crack and frac.first_break_time is not None:  # also a resumed run's
+                say(f"  t {frac.t:.4g} s: the first crack; the run ends here (injection.until)")
                 break
             frac.dt = min(frac.dt, t_end - frac.t)
             debris = frac.debris_cells
@@ -518,9 +515,6 @@ def _step_until(
                 )
             for w in watchers:
                 w.step(frac, rec)
-            if at_first_crack and frac.first_break_time is not None:
-                say(f"  t {rec.time:.4g} s: the first crack; the run ends here (injection.until)")
-                break
     except SimulationStopped as exc:
         stopped, limit = str(exc), isinstance(exc, ValidityLimit)
         say(f"{'ended at the validity limit of the model' if limit else 'stopped'}: {exc}")
