@@ -21,6 +21,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from hfcdem.config.fingerprint import fingerprinted
 from hfcdem.config.parts import (
     AXES,
     MAX_CELLS,
@@ -58,6 +59,7 @@ def _segment_distance(p0: np.ndarray, p1: np.ndarray, q0: np.ndarray, q1: np.nda
 # ---------------------------------------------------------------------------
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class PerforatedBlock:
     """A rock block with a wellbore and perforation tunnels (3D)."""
@@ -307,6 +309,7 @@ class PerforatedBlock:
 Geometry = PerforatedBlock | CrackPlate | KGDStrip | BoreholeSquare | AngledPathPlate
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class Scene:
     """A named scene: its geometry and, when the file states them, its physics."""

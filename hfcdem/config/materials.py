@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
+
+from hfcdem.config.fingerprint import added_field, fingerprinted
 
 
 def _check_positive(name: str, value: float, unit: str, upper: float = math.inf) -> None:
@@ -31,6 +33,7 @@ PERMEABILITY_COEFFICIENT = 8.33e-11
 JOINT_HYDRAULIC_APERTURE = 1.0e-6
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class JointAperture:
     """The intact joints' aperture ``value`` (m), held at cells of ``reference_size`` (m).
@@ -60,6 +63,7 @@ class JointAperture:
         return self.value * np.cbrt(ratio), self.value * ratio
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class ElasticMaterial:
     """Isotropic linear elastic rock (Pa, -)."""
@@ -85,6 +89,7 @@ class ElasticMaterial:
         return e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class InSituStress:
     """Principal in-situ stresses, compression positive, in Pa.
@@ -128,6 +133,7 @@ class InSituStress:
 BREAK_RULES = ("all", "most_overstressed", "cap")
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class InterfaceModel:
     """Spring stiffness, strength and post-failure behaviour of the interfaces.
@@ -164,17 +170,7 @@ class InterfaceModel:
     break_rule: str = "most_overstressed"
     max_breaks: int = 1
     residual_stiffness: float = 1e-10
-    # left out of repr while 0 (see __repr__): runs written before it resume
-    strength_length: float = field(default=0.0, repr=False)
-
-    def __repr__(self) -> str:
-        # the scene fingerprint hashes reprs; a field added later keeps its default out
-        # of them so that older runs still resume
-        shown = ", ".join(
-            f"{f}={getattr(self, f)!r}" for f in self.__dataclass_fields__ if f != "strength_length"
-        )
-        extra = f", strength_length={self.strength_length!r}" if self.strength_length else ""
-        return f"InterfaceModel({shown}{extra})"
+    strength_length: float = added_field(0.0, since="2026-12-05")
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.strength_length) and 0.0 <= self.strength_length <= 10.0):
@@ -227,6 +223,7 @@ def _check_range(name: str, value: float, low: float, high: float, unit: str) ->
         raise ValueError(f"{name} must be in [{low:g}, {high:g}] {unit}, got {value!r}")
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class Fluid:
     """A Newtonian, slightly compressible fluid.
@@ -270,6 +267,7 @@ def _schedule(name: str, points: Sequence[Sequence[float]], unit: str) -> tuple:
     return pts
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class Injection:
     """Fluid delivered into the cavity: a rate schedule or a pressure schedule.

@@ -15,6 +15,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from hfcdem.config.fingerprint import fingerprinted
 from hfcdem.config.tables import SceneError
 
 Vector = tuple[float, float, float]
@@ -74,6 +75,7 @@ def check_axis(path: str, axis: str) -> None:
 # ---------------------------------------------------------------------------
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class Profile:
     """Cross-sections of a perforation tunnel: ``diameters`` at ``stations`` from the wall (m)."""
@@ -179,6 +181,7 @@ def tunnel_extension(profile: Profile, wellbore_radius: float) -> tuple[float, f
     return delta, r
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class Perforation:
     """A perforation tunnel: its profile, unit ``direction`` and ``entry`` along the wellbore."""
@@ -211,6 +214,7 @@ class Perforation:
 # ---------------------------------------------------------------------------
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class Block:
     """A rectangular rock block centred at the origin; ``size`` = edge lengths (m)."""
@@ -229,6 +233,7 @@ class Block:
         return 0.5 * np.asarray(self.size)
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class Wellbore:
     """A circular wellbore through the block centre along ``axis``."""
@@ -246,6 +251,7 @@ class Wellbore:
         return 0.5 * self.diameter
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class SphereZone:
     """Fracturable zone: a ball (a disc in 2D) of ``radius`` around ``centre``."""
@@ -265,6 +271,7 @@ class SphereZone:
         return None
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class TunnelZone:
     """Fracturable zone: a cylinder of ``radius`` around a perforation's axis.
@@ -291,6 +298,7 @@ class TunnelZone:
             raise SceneError("beyond_tip", f"expected a length >= 0, got {self.beyond_tip!r}")
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class SlabZone:
     """Fracturable zone: the slab ``|x[axis] - offset| <= thickness / 2``."""
@@ -316,6 +324,7 @@ class SlabZone:
 FracturableZone = SphereZone | TunnelZone | SlabZone
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class MeshSizing:
     """Element sizes: ``size`` at the perforation (the knob), growing to ``size_far``.
@@ -411,6 +420,7 @@ class MeshSizing:
         return max(self.size_far - start, 0.0) / self.grading
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class Plate:
     """A rectangular 2D plate centred at the origin."""
@@ -428,6 +438,7 @@ class Plate:
         return np.array([0.5 * self.width, 0.5 * self.height, 0.0])
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class Crack:
     """A straight crack along x through the origin (total ``length``).

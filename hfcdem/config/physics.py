@@ -104,6 +104,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from hfcdem.config.fingerprint import fingerprinted
 from hfcdem.config.materials import (
     JOINT_HYDRAULIC_APERTURE,
     ElasticMaterial,
@@ -138,6 +139,7 @@ _SMALLEST_STRESS = 1e3  # Pa
 _LARGEST_STRESS = 1e9  # Pa
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class SolverSettings:
     """Numerical choices of a run (SI units).
@@ -168,6 +170,7 @@ class SolverSettings:
     contact_hysteresis: bool = True
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class StaticLoad:
     """A pressure held on the pre-existing crack faces, solved once, elastic (no flow)."""
@@ -181,6 +184,7 @@ class StaticLoad:
             )
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class Physics:
     """Everything a run needs besides the mesh, complete when constructed.

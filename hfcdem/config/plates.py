@@ -13,6 +13,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from hfcdem.config.fingerprint import fingerprinted
 from hfcdem.config.parts import (
     MAX_CELLS,
     Crack,
@@ -104,6 +105,7 @@ def _estimate_plate_cells(geom: Any, start: float, line: float = 0.0, radius: fl
     return estimate_cells(geom.mesh, area, [(start, around)], 2)
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class CrackPlate:
     """A 2D plate with a central pre-existing crack along x (tag ``crack``)."""
@@ -135,6 +137,7 @@ class CrackPlate:
         return _estimate_plate_cells(self, self.mesh.size, line=self.crack.length)
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class KGDStrip:
     """A 2D plate with an initial crack and a fracture path along x; injection at the origin."""
@@ -195,6 +198,7 @@ class KGDStrip:
         return _estimate_plate_cells(self, self.path_start, line=path)
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class BoreholeSquare:
     """A 2D plate with a circular borehole at its centre (tag ``wellbore_wall``)."""
@@ -260,6 +264,7 @@ class BoreholeSquare:
 WINGS = ("point", "mirror")
 
 
+@fingerprinted
 @dataclass(frozen=True)
 class AngledPathPlate:
     """A 2D plate with a central initial crack along x and a straight path from each end.
