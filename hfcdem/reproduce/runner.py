@@ -307,6 +307,7 @@ def _execute(
     from hfcdem.config.scene import load_scene
     from hfcdem.workflows.convergence import characteristic_size, load_convergence
     from hfcdem.workflows.convergence import run_convergence as converge
+    from hfcdem.workflows.memory import release_memory
     from hfcdem.workflows.run import run_scene, scene_fingerprint
     from hfcdem.workflows.study import case_done, load_study, run_study
 
@@ -322,6 +323,7 @@ def _execute(
             summary = json.loads((where / "summary.json").read_text())
         else:
             summary = run_scene(scene, where, comm, force=True, say=say)
+            release_memory()
         text = _size_text(characteristic_size(scene), resolution, summary.get("cells"))
         return CaseResult(where, (scene,), summary=summary), text, skipped
     if case.kind == "study":

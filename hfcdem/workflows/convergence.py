@@ -54,11 +54,11 @@ and the method, e.g. ``two-finest: not monotone``), ``convergence.json`` (both)
 and ``convergence.png`` (each answer against h, log x, with the extrapolated
 value and the error band; wall time and peak memory against h).
 
-Peak memory is getrusage's high-water mark of each rank, summed and the largest
-one: the process's peak so far, which is why cases run coarse to fine (a
-coarse case run after a fine one in the same process would report the fine
-one's peak).  Cases are never run at once (``--groups``): their timings would
-share the cores.
+Peak memory is each rank's resident high-water mark during the case, summed and
+the largest one (:mod:`hfcdem.workflows.memory`; where the mark cannot be
+restarted, the process's peak so far, so cases run coarse to fine: a coarse
+case after a fine one would report the fine one's peak).  Cases are never run
+at once (``--groups``): their timings would share the cores.
 """
 
 from __future__ import annotations

@@ -49,6 +49,7 @@ from hfcdem.io.series import FieldSeries
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solvers import ValidityLimit
+from hfcdem.workflows.memory import free_petsc_garbage, peak_memory_mb, reset_peak_memory
 from hfcdem.workflows.observers import (
     CheckpointWriter,
     FirstCrack,
@@ -249,6 +250,7 @@ def run_scene(
         )
     say = say or (lambda msg: None)
     wall0 = time.perf_counter()
+    own_peak = comm.allreduce(reset_peak_memory(), op=MPI.LAND)  # the peak is this run's
     out = Path(output)
     _claim_output(out, scene, force, comm)
     out = prepare_output_dir(out, comm)
@@ -278,8 +280,9 @@ def run_scene(
             "cells": cells,
             "unknowns": dofs,
             "ranks": comm.size,
-            "peak_memory_MB": _peak_memory_mb(comm),
-            "peak_memory_rank_max_MB": _peak_memory_mb(comm, MPI.MAX),
+            "peak_memory_MB": peak_memory_mb(comm),
+            "peak_memory_rank_max_MB": peak_memory_mb(comm, MPI.MAX),
+            "peak_memory_scope": "run" if own_peak else "process",
             "wall_time_s": time.perf_counter() - wall0,
             "versions": versions(comm),
             "defaults_used": list(phys.defaulted),
@@ -289,14 +292,20 @@ def run_scene(
     if phys.load is not None:
         from hfcdem.workflows.static import run_static
 
-        return run_static(scene, solid, out, say, record)
-    if phys.wall_joints == "seepage":
+        summary = run_static(scene, solid, out, say, record)
+    elif phys.wall_joints == "seepage":
         from hfcdem.workflows.seepage_ramp import run_seepage_ramp
 
         cavity = pressurised_groups(tmesh.facet_names, phys.wellbore)
         supports = supporting_walls(tmesh.facet_names, cavity, phys.wellbore)
-        return run_seepage_ramp(scene, solid, cavity, out, say, record, supports)
-    return _run_coupled(scene, solid, out, say, record, resume, observers)
+        summary = run_seepage_ramp(scene, solid, cavity, out, say, record, supports)
+    else:
+        summary = _run_coupled(scene, solid, out, say, record, resume, observers)
+    # the solid's PETSc objects live on the mesh's communicator, whose garbage
+    # petsc4py keeps until it is cleaned on that communicator: the mesh must outlive it
+    del solid
+    free_petsc_garbage(tmesh.mesh.comm)
+    return summary
 
 
 def _write_run_record(out: Path, scene: Scene, comm: MPI.Comm) -> None:
@@ -555,18 +564,6 @@ def _first_crack_pressure(frac: HydraulicFracture) -> float | None:
         return None
     before = [r.injection_pressure for r in frac.history if r.time < t]
     return max([*before, frac.settings.initial_pressure]) / 1e6
-
-
-def _peak_memory_mb(comm: MPI.Comm, op: MPI.Op = MPI.SUM) -> float:
-    """Peak resident memory of the ranks (MB) from getrusage: their sum, or ``op`` over them.
-
-    The process's high-water mark since it started, so a run after a larger one
-    in the same process reports the larger one's peak.
-    """
-    import resource
-
-    kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # kB on Linux
-    return float(comm.allreduce(kb, op=op)) / 1024.0
 
 
 def _first_crack(

@@ -275,6 +275,7 @@ def run_cases(
     ``groups``: run that many cases at once, the ranks split between them.
     ``keep_stopped``: a case that stopped counts as done (else it runs again).
     """
+    from hfcdem.workflows.memory import release_memory
     from hfcdem.workflows.run import run_scene, scene_fingerprint
 
     if not 1 <= groups <= comm.size:
@@ -300,6 +301,7 @@ def run_cases(
                     print(f"  [{lab}] {msg}", flush=True)
 
             run_scene(scene, case_dir, sub, force=True, say=progress)
+            release_memory()  # else the next, larger case grows past this one's freed heap
     finally:
         sub.Free()
     comm.barrier()
