@@ -164,6 +164,15 @@ def _run(args: argparse.Namespace) -> int:
             f"{args.output}/"
         )
         return _exit_code(summary)
+    if summary.get("until") == "first crack" and summary.get("first_crack_pressure_MPa") is None:
+        peak = summary.get("peak_pressure_MPa")
+        say(
+            f"{scene.name}: no first crack by the end of the injection "
+            '(injection.until = "first crack" ran to injection.duration)'
+            + (f"; highest pressure {peak:.2f} MPa" if peak is not None else "")
+            + f", {summary['wall_time_s']:.1f} s; results in {args.output}/"
+        )
+        return _exit_code(summary)
     if summary.get("kind") == "seepage_pumping":
         fc = summary["first_crack_pressure_MPa"]
         peak = summary["peak_pressure_MPa"]
@@ -580,7 +589,29 @@ def main(argv: Sequence[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
         return 2
-    return int(args.func(args))
+    from mpi4py import MPI
+
+    from hfcdem.io.files import OutputDirError
+
+    say = _printer(MPI.COMM_WORLD)
+    try:
+        return int(args.func(args))
+    except OutputDirError as exc:
+        say(f"error: {exc}", err=True)
+        return 3
+    except KeyboardInterrupt:  # Ctrl-C: one line, not a solver's traceback
+        say(f"interrupted: {_AFTER_INTERRUPT.get(args.command, _WHOLE)}", err=True)
+        return 130
+
+
+_WHOLE = "every output is written whole, so nothing written before is lost"
+#: what a user has after Ctrl-C, per command
+_AFTER_INTERRUPT = {
+    "run": "the steps written so far stand (history.csv, checkpoint.json); continue with "
+    "--resume (a seepage run starts again)",
+    "study": "finished cases stand; run the same command again to go on (they are skipped)",
+    "reproduce": "finished cases stand; run the same command again to go on (they are skipped)",
+}
 
 
 __all__ = [

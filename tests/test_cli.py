@@ -98,3 +98,18 @@ def test_the_last_line_gives_the_breakdown_or_why_not_with_the_highest_pressure(
     none = {**doubted, "breakdown_pressure_MPa": None, "breakdown_note": "still rises"}
     assert breakdown_words(none) == "none (still rises; highest pressure 10.12 MPa)"
     assert breakdown_words({**none, "breakdown_note": None}) == "none"
+
+
+def test_ctrl_c_ends_with_one_line_and_exit_130(monkeypatch, capsys):
+    import hfcdem.cli as cli
+
+    def interrupted(args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_info", interrupted)
+    assert main(["info"]) == 130
+    from mpi4py import MPI
+
+    if MPI.COMM_WORLD.rank == 0:
+        err = capsys.readouterr().err
+        assert err.startswith("interrupted: ") and "Traceback" not in err

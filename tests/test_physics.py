@@ -124,12 +124,25 @@ def test_cavity_options():
         ({"solver__break_landing": "late"}, "solver.break_landing"),
         ({"solver__break_landing": "step"}, "solver.break_landing"),  # not a seepage run
         ({"solver__break_landing": "tolerance"}, "solver.break_landing"),
+        ({"solver__max_breaks_per_iteration": 0}, "solver.max_breaks_per_iteration"),
+        ({"solver__max_breaks_per_iteration": -1}, "solver.max_breaks_per_iteration"),
+        ({"solver__max_breaks_per_iteration": 1.5}, "solver.max_breaks_per_iteration"),
+        ({"injection__extra_volume": "1 MPa"}, "injection.extra_volume"),
+        ({"injection__extra_volume": "-1 L"}, "injection.extra_volume"),
     ],
 )
 def test_bad_input_names_the_key(changes, key):
     with pytest.raises(SceneError) as err:
         scene(**changes)
     assert key in str(err.value)
+
+
+def test_extra_volume_takes_a_unit_or_a_number_in_m3():
+    assert scene().physics.extra_volume == 0.0
+    assert scene(injection__extra_volume="0.5 L").physics.extra_volume == pytest.approx(5e-4)
+    assert scene(injection__extra_volume="2 bbl").physics.extra_volume == pytest.approx(0.31797459)
+    assert scene(injection__extra_volume=0.001).physics.extra_volume == 0.001
+    assert scene(solver__max_breaks_per_iteration=3).physics.solver.max_breaks_per_iteration == 3
 
 
 def test_output_section():

@@ -301,8 +301,76 @@ def test_a_resume_on_another_mesh_is_refused(shared_tmp_path):
     finer = load_scene(KGD)  # the default resolution: another mesh
     with pytest.raises(SceneError, match="another mesh"):
         run_scene(finer, out, resume=True, force=True)
-    # nothing written before is lost
+    # nothing written before is lost, run.json included: a plain resume still finds its run
     assert json.loads((out / "checkpoint.json").read_text())["steps"] > 0
+    assert json.loads((out / "run.json").read_text())["resolution"] == "coarse"
+    from hfcdem.workflows.run import _claim_output
+
+    _claim_output(out, scene, False, MPI.COMM_WORLD)  # would raise OutputInUse
+
+
+def test_a_forced_run_refused_after_meshing_leaves_the_earlier_run_whole(shared_tmp_path):
+    out = shared_tmp_path / "kept_whole"
+    run_scene(load_scene(KGD, "coarse"), out)
+    before = {n: (out / n).read_text() for n in ("run.json", "summary.json", "history.csv")}
+    # refused by a check of the seepage ramp, and a crack plate has nothing to inject at
+    ramp = load_scene(
+        "meshes/scenes/borehole_seepage.toml", "coarse",
+        overrides={"solver.break_landing": "tolerance"},
+    )  # fmt: skip
+    with pytest.raises(SceneError, match=r"solver\.break_landing"):
+        run_scene(ramp, out, force=True)
+    plate = parse_scene(
+        {**_toml("meshes/scenes/crack_plate.toml"), **_toml(KGD, ("rock", "stress", "fluid",
+         "injection"))}, "plate_injected", "coarse",
+    )  # fmt: skip
+    with pytest.raises(SceneError, match="no wellbore, tunnel or injection point"):
+        run_scene(plate, out, force=True)
+    assert {n: (out / n).read_text() for n in before} == before
+
+
+def _toml(path, sections=None):
+    import tomllib
+
+    with open(path, "rb") as fh:
+        data = tomllib.load(fh)
+    if sections is None:
+        return {k: v for k, v in data.items() if k not in ("load",)}
+    return {k: data[k] for k in sections if k in data}
+
+
+def test_a_directory_of_other_files_is_not_written_into_without_force(shared_tmp_path):
+    out = shared_tmp_path / "foreign"
+    if MPI.COMM_WORLD.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "history.csv").write_text("mine\n")
+    MPI.COMM_WORLD.barrier()
+    with pytest.raises(OutputInUse, match=r"no run\.json"):
+        run_scene(load_scene(KGD, "coarse"), out)
+    assert (out / "history.csv").read_text() == "mine\n"
+    assert not (out / "run.json").exists()
+
+
+def test_cli_refuses_an_output_that_is_a_file(shared_tmp_path, capsys):
+    target = shared_tmp_path / "a_file"
+    if MPI.COMM_WORLD.rank == 0:
+        target.write_text("keep\n")
+    MPI.COMM_WORLD.barrier()
+    assert main(["run", KGD, "--resolution", "coarse", "-o", str(target)]) == 3
+    if MPI.COMM_WORLD.rank == 0:
+        assert "is a file, not a directory" in capsys.readouterr().err
+    assert target.read_text() == "keep\n"
+
+
+def test_cli_says_when_a_run_until_its_first_crack_found_none(shared_tmp_path, capsys):
+    out = shared_tmp_path / "no_first_crack"
+    args = ["run", BOREHOLE, "--resolution", "coarse", "-o", str(out), "--set",
+            'injection.until="first crack"', "--set", 'injection.duration="0.05 s"']  # fmt: skip
+    assert main(args) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["first_crack_pressure_MPa"] is None
+    if MPI.COMM_WORLD.rank == 0:
+        assert "no first crack by the end of the injection" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(

@@ -40,7 +40,7 @@ them so a run's record can print what was assumed.  Any invalid field raises
     rate = "1e-7 m3/s"
     duration = "60 s"
     initial_pressure = "0 MPa"
-    extra_volume = "0 m3"       # storage outside the model (not yet a unit: m3 as a number)
+    extra_volume = "0 m3"       # storage outside the model (a bare number is m3)
     wellbore = "cased"          # "cased" (wall at its in-situ traction), "drilled" (drilled at
                                 # initial_pressure, then held by its casing) or "open" (pumped)
     wall_film = "5 um"          # fluid storage = film thickness x pressurised wall area
@@ -254,6 +254,15 @@ class _Reader:
         return table.quantity(key, kind, default)
 
 
+def _at_least_one(table: TomlTable, key: str) -> int | None:
+    """Read an optional integer count that must be at least 1 (None when not given)."""
+    if not table.has(key):
+        return None
+    value = int(table.number(key, integer=True))
+    _check(value >= 1, table.sub(key), f"expected an integer of at least 1, got {value}")
+    return value
+
+
 def _check(ok: bool, path: str, reason: str) -> None:
     if not ok:
         raise SceneError(path, reason)
@@ -416,7 +425,12 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
         else:
             duration = inj.quantity("duration", "time")
         _check(duration > 0.0, "injection.duration", f"must be positive, got {duration:g} s")
-        extra = r.get(inj, "extra_volume", "number", (Physics, "extra_volume"))
+        extra = r.get(  # a volume with its unit; a bare number is m3 (older scenes)
+            inj,
+            "extra_volume",
+            "volume" if isinstance(inj.data.get("extra_volume"), str) else "number",
+            (Physics, "extra_volume"),
+        )
         _check(extra >= 0.0, "injection.extra_volume", f"must be >= 0 m3, got {extra!r}")
         # perforated wells are cased: only the tunnels are open hole
         wellbore = r.get(inj, "wellbore", "string", (Physics, "wellbore"), choices=WELLBORES)
@@ -541,11 +555,7 @@ def _read_solver(r: _Reader) -> SolverSettings:
             (SolverSettings, "break_rule"),
             choices=("all", "most_overstressed", "cap"),
         ),
-        max_breaks_per_iteration=(
-            so.number("max_breaks_per_iteration", integer=True)
-            if so.has("max_breaks_per_iteration")
-            else None
-        ),
+        max_breaks_per_iteration=_at_least_one(so, "max_breaks_per_iteration"),
         strength_points=r.get(
             so,
             "strength_points",

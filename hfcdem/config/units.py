@@ -35,6 +35,7 @@ UNITS: dict[str, dict[str, float]] = {
         "mL/min": 1e-6 / 60.0,
         "bbl/min": 0.158987294928 / 60.0,
     },
+    "volume": {"m3": 1.0, "L": 1e-3, "cm3": 1e-6, "mL": 1e-6, "bbl": 0.158987294928},
     "viscosity": {"Pa.s": 1.0, "mPa.s": 1e-3, "cP": 1e-3},
     "density": {"kg/m3": 1.0, "g/cm3": 1e3},
     "pressure_rate": {
@@ -53,6 +54,7 @@ EXAMPLES = {
     "stress": "38 MPa",
     "time": "60 s",
     "flow_rate": "1e-7 m3/s",
+    "volume": "0.5 L",
     "viscosity": "1 mPa.s",
     "density": "1000 kg/m3",
     "pressure_rate": "1 MPa/s",

@@ -26,20 +26,27 @@ from mpi4py import MPI
 from hfcdem.mesh.tagged import TaggedMesh
 
 
+class OutputDirError(OSError):
+    """The output directory cannot be made or written (the message says why)."""
+
+
 def prepare_output_dir(path: str | os.PathLike[str], comm: MPI.Comm = MPI.COMM_WORLD) -> Path:
-    """Create ``path`` (on rank 0) and return it on every rank."""
+    """Create ``path`` (on rank 0) and return it on every rank (:class:`OutputDirError`)."""
     out = Path(path)
     error = None
     if comm.rank == 0:
         try:
-            out.mkdir(parents=True, exist_ok=True)
-            if not os.access(out, os.W_OK):
-                error = f"output directory {out} is not writable"
+            if out.exists() and not out.is_dir():
+                error = f"output {out} is a file, not a directory: give another -o"
+            else:
+                out.mkdir(parents=True, exist_ok=True)
+                if not os.access(out, os.W_OK):
+                    error = f"output directory {out} is not writable"
         except OSError as exc:
-            error = f"cannot create output directory {out}: {exc}"
+            error = f"cannot create output directory {out}: {exc.strerror or exc}"
     error = comm.bcast(error, root=0)
     if error:
-        raise OSError(error)
+        raise OutputDirError(error)
     return out
 
 
@@ -254,6 +261,7 @@ def read_results(path: str | os.PathLike[str]) -> Results:
 
 
 __all__ = [
+    "OutputDirError",
     "Results",
     "atomic_path",
     "prepare_output_dir",

@@ -95,6 +95,11 @@ def _claim_output(out: Path, scene: Scene, force: bool, comm: MPI.Comm) -> None:
                 f"{out} holds the results of scene {previous.get('scene', '?')!r} "
                 f"(a different scene or settings); use --force to overwrite, or another -o"
             )
+    elif comm.rank == 0 and not force and out.is_dir() and any(out.iterdir()):
+        problem = (
+            f"{out} holds files but no hfcdem run (no run.json): they could be "
+            "overwritten; use another -o, or --force"
+        )
     problem = comm.bcast(problem, root=0)
     if problem:
         raise OutputInUse(problem)
@@ -177,6 +182,21 @@ def wall_area(tmesh: Any, groups: tuple[str, ...]) -> float:
     return float(tmesh.mesh.comm.allreduce(local, op=MPI.SUM))
 
 
+def _check_loaded_walls(scene: Scene, names: Any) -> None:
+    """Refuse an injection into a mesh with no wall or point to inject at (before writing)."""
+    phys = scene.physics
+    if phys.load is not None:
+        return
+    if not pressurised_groups(names, phys.wellbore) and (
+        getattr(scene.geometry, "injection_point", None) is None
+    ):
+        raise SceneError(
+            "geometry",
+            "the scene has no wellbore, tunnel or injection point for [injection]; a crack "
+            "plate takes a static [load]",
+        )
+
+
 def build_fracture(scene: Scene, solid: CDEMSolid) -> HydraulicFracture:
     """Build the coupled fluid-solid model of a scene."""
     phys = scene.physics
@@ -241,13 +261,17 @@ def run_scene(
         what = (
             "a static [load] scene"
             if scene.physics.load is not None
-            else 'a pumped seepage run (injection.wall_joints = "seepage")'
+            else 'a seepage run (injection.wall_joints = "seepage": a pressure ramp or pumping)'
         )
         raise SceneError(
             "",
             f"--resume: {what} keeps no checkpoint to continue from; run it again "
             "without --resume (into another -o, or with --force to replace its results)",
         )
+    if scene.physics.load is None and scene.physics.wall_joints == "seepage":
+        from hfcdem.workflows.seepage_ramp import seepage_loading
+
+        seepage_loading(scene)  # its checks, before an earlier run's files are touched
     say = say or (lambda msg: None)
     wall0 = time.perf_counter()
     own_peak = comm.allreduce(reset_peak_memory(), op=MPI.LAND)  # the peak is this run's
@@ -255,14 +279,18 @@ def run_scene(
     _claim_output(out, scene, force, comm)
     out = prepare_output_dir(out, comm)
     phys = scene.physics
-    _write_run_record(out, scene, comm)
-    if not resume and comm.rank == 0:  # another run's answers must not pass for this one's
-        (out / "summary.json").unlink(missing_ok=True)
-    comm.barrier()
     if phys.defaulted:
         say("defaults: " + ", ".join(phys.defaulted))
     sm = create_scene_mesh(scene, comm)
     tmesh = sm.tmesh
+    _check_loaded_walls(scene, tmesh.facet_names)
+    # an earlier run's files are touched only now, when the scene has meshed and
+    # passed every check; a resume writes its record once the checkpoint is taken
+    if not resume:
+        _write_run_record(out, scene, comm)
+        if comm.rank == 0:  # another run's answers must not pass for this one's
+            (out / "summary.json").unlink(missing_ok=True)
+        comm.barrier()
     cells = tmesh.mesh.topology.index_map(tmesh.mesh.topology.dim).size_global
     solid = build_solid(scene, tmesh)
     dofs = solid.V.dofmap.index_map.size_global * solid.gdim
@@ -339,6 +367,7 @@ def _run_coupled(
     first = FirstCrack(lambda f: _first_crack(scene, f, stress=True))
     if resume:
         _resume(frac, out, fingerprint, first, say, comm)
+        _write_run_record(out, scene, comm)  # only now: a refused resume leaves it as it was
     resumed = bool(frac.history)
     walls = in_situ_wall_tension(scene)
     warning = wall_tension_warning(walls)
