@@ -205,3 +205,14 @@ def test_every_default_has_one_home():
     assert phys.fluid == Fluid()
     assert phys.interfaces.alpha == model.alpha
     assert phys.interfaces.friction_angle == pytest.approx(model.friction_angle)
+
+
+def test_an_unknown_key_lists_the_optional_keys_of_its_table_too():
+    with pytest.raises(SceneError) as err:
+        scene(rock__tensile_strenght="3 MPa")
+    listed = str(err.value).split("this table takes: ")[1]
+    for key in ("tensile_strength", "weibull_modulus", "strength_length", "joint_aperture"):
+        assert key in listed
+    with pytest.raises(SceneError) as err:
+        scene(output__intervl="1 s")
+    assert "interval" in str(err.value).split("this table takes: ")[1]

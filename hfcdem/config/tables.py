@@ -29,6 +29,7 @@ class TomlTable:
         self.data = dict(data)
         self.path = path
         self.used: set[str] = set()
+        self.asked: set[str] = set()  # keys looked for, given or not: what the table takes
 
     def sub(self, key: str) -> str:
         """Return the dotted path of ``key`` in this table."""
@@ -36,6 +37,7 @@ class TomlTable:
 
     def has(self, key: str) -> bool:
         """Tell whether the table gives ``key``."""
+        self.asked.add(key)
         return key in self.data
 
     def raw(self, key: str, default: Any = MISSING, expected: str = "a value") -> Any:
@@ -105,7 +107,7 @@ class TomlTable:
         """Refuse any key not read (nor listed in ``extra``)."""
         unknown = sorted(set(self.data) - self.used - set(extra))
         if unknown:
-            known = ", ".join(sorted(self.used | set(extra)))
+            known = ", ".join(sorted(self.used | self.asked | set(extra)))
             raise SceneError(self.sub(unknown[0]), f"unknown key; this table takes: {known}")
 
 
