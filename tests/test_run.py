@@ -568,3 +568,21 @@ def test_a_tunnel_run_records_sigma_xx_at_its_first_crack(shared_tmp_path):
     assert ratios[first["place"]] == max(ratios.values()) and ratios[first["place"]] >= 1.0
     assert first["mode"] == "tensile"
     assert sum(first["interfaces_by_place"].values()) == first["interfaces"]
+
+
+def test_a_strength_length_below_the_cells_and_an_unused_fidelity_are_said():
+    from hfcdem.workflows.run import _warn_unresolved
+
+    def said(path, **sets):
+        lines = []
+        _warn_unresolved(load_scene(path, "coarse", overrides=sets), lines.append)
+        return " ".join(lines)
+
+    assert "below the cells' size at the cavity (6 mm)" in said(
+        BOREHOLE, **{"rock.strength_length": "1 mm"}
+    )
+    assert said(BOREHOLE, **{"rock.strength_length": "12 mm"}) == ""
+    assert said(BOREHOLE) == ""
+    seepage = "meshes/scenes/borehole_seepage.toml"
+    assert "solver.fidelity is not used" in said(seepage, **{"solver.fidelity": "viscous"})
+    assert said(seepage) == ""

@@ -182,6 +182,30 @@ def wall_area(tmesh: Any, groups: tuple[str, ...]) -> float:
     return float(tmesh.mesh.comm.allreduce(local, op=MPI.SUM))
 
 
+def _warn_unresolved(scene: Scene, say: Callable[[str], None]) -> None:
+    """Say when a scene asks for what its mesh or its rung does not do."""
+    from hfcdem.workflows.convergence import characteristic_size
+
+    phys = scene.physics
+    length = phys.interfaces.strength_length
+    h = characteristic_size(scene)
+    if 0.0 < length < h:
+        say(
+            f"warning: rock.strength_length = {length * 1e3:.3g} mm is below the cells' size "
+            f"at the cavity ({h * 1e3:.3g} mm): the filter cannot resolve it there, so the "
+            "answer follows the mesh; refine the mesh or lengthen it"
+        )
+    if (
+        phys.load is None
+        and phys.wall_joints == "seepage"
+        and "solver.fidelity" not in (phys.defaulted)
+    ):
+        say(
+            "note: solver.fidelity is not used by a seepage run (injection.wall_joints = "
+            '"seepage"): the joints carry the flow'
+        )
+
+
 def _check_loaded_walls(scene: Scene, names: Any) -> None:
     """Refuse an injection into a mesh with no wall or point to inject at (before writing)."""
     phys = scene.physics
@@ -295,6 +319,7 @@ def run_scene(
     solid = build_solid(scene, tmesh)
     dofs = solid.V.dofmap.index_map.size_global * solid.gdim
     say(f"{scene.name}: {cells} cells, {dofs} unknowns, {comm.size} rank(s)")
+    _warn_unresolved(scene, say)
     if solid.mode == "reduced":
         say(
             "reduced solid: springs in a band around the cracks and cavity walls that grows "
