@@ -129,6 +129,11 @@ def test_cavity_options():
         ({"solver__max_breaks_per_iteration": 1.5}, "solver.max_breaks_per_iteration"),
         ({"injection__extra_volume": "1 MPa"}, "injection.extra_volume"),
         ({"injection__extra_volume": "-1 L"}, "injection.extra_volume"),
+        # ranges the dataclasses check name the scene key, not the field
+        ({"rock__spring_factor": 0}, "rock.spring_factor"),
+        ({"rock__weibull_modulus": 0.01}, "rock.weibull_modulus"),
+        ({"fluid__viscosity": "1e9 Pa.s"}, "fluid.viscosity"),
+        ({"stress__sh_max": "5 MPa"}, "stress.sh_max"),
     ],
 )
 def test_bad_input_names_the_key(changes, key):

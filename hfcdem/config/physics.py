@@ -660,7 +660,30 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             defaulted=tuple(r.defaulted),
         )
     except ValueError as exc:  # a range the dataclasses check themselves
-        raise SceneError("", str(exc)) from None
+        said = str(exc)
+        key = next((k for name, k in _SCENE_KEYS.items() if said.startswith(f"{name} ")), "")
+        raise SceneError(key, said) from None
+
+
+#: the scene key of each dataclass field a range check names (its words start with it)
+_SCENE_KEYS = {
+    "alpha": "rock.spring_factor",
+    "poisson_ratio": "rock.poisson_ratio",
+    "shear_ratio": "rock.shear_ratio",
+    "friction_angle": "rock.friction_angle",
+    "weibull_modulus": "rock.weibull_modulus",
+    "strength_length": "rock.strength_length",
+    "tensile_strength": "rock.tensile_strength",
+    "cohesion": "rock.cohesion",
+    "joint aperture": "rock.joint_aperture",
+    "joint reference size": "rock.joint_reference_size",
+    "sh_max": "stress.sh_max",
+    "sh_min": "stress.sh_min",
+    "sv": "stress.sv",
+    "viscosity": "fluid.viscosity",
+    "injection rate": "injection.rate",
+    "injection pressure": "injection.pressure_schedule",
+}
 
 
 __all__ = [
