@@ -97,3 +97,20 @@ def test_a_static_scene_without_a_crack_is_refused(shared_tmp_path):
     )
     with pytest.raises(SceneError, match="no pre-existing crack"):
         run_scene(scene, shared_tmp_path / "nocrack")
+
+
+def test_a_crack_pressed_shut_is_said_and_compared_to_nothing(shared_tmp_path):
+    scene = load_scene(SNEDDON, "coarse", overrides={"load.crack_pressure": "0 MPa"})
+    said = []
+    summary = run_scene(scene, shared_tmp_path / "shut", say=said.append)
+    ref = summary["sneddon"]
+    assert ref["net_pressure_MPa"] == 0.0
+    assert ref["centre_relative_error"] is None and ref["max_relative_error_inner"] is None
+    text = " ".join(said)
+    assert "the faces are pressed shut" in text and "nan" not in text
+    # written as plain JSON: no NaN
+    json.loads((shared_tmp_path / "shut" / "summary.json").read_text(), parse_constant=_refuse)
+
+
+def _refuse(name):
+    raise ValueError(f"{name} in summary.json")
