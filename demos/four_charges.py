@@ -96,6 +96,9 @@ def main(argv: list[str] | None = None) -> list[dict]:
     parser.add_argument("-o", "--output", default="results/four_charges")
     parser.add_argument("--resolution", default="coarse", help="mesh resolution of the scene")
     parser.add_argument("--groups", type=int, default=1, help="cases run at once")
+    parser.add_argument(
+        "--force", action="store_true", help="run every case again, over other settings' runs"
+    )
     parser.add_argument("--duration", default=None, help="injection time, e.g. '120 s'")
     args = parse_with_petsc_options(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
@@ -104,7 +107,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
     study = load_study(ROOT / "studies/four_charges.toml", resolution=args.resolution)
     if args.duration:
         study = study.with_fixed({"injection.duration": args.duration})
-    rows = run_study(study, args.output, comm, groups=args.groups, say=say)
+    rows = run_study(study, args.output, comm, groups=args.groups, force=args.force, say=say)
 
     # what we get next to what the paper printed (Fig. 15 and 19); the ranking is by
     # peak pressure, and there is none unless every case cracked

@@ -98,6 +98,9 @@ def main(argv: list[str] | None = None) -> list[dict]:
     parser.add_argument("-o", "--output", default="results/lab_specimen")
     parser.add_argument("--resolution", default="coarse", help="mesh resolution of the scene")
     parser.add_argument("--groups", type=int, default=1, help="cases run at once")
+    parser.add_argument(
+        "--force", action="store_true", help="run every case again, over other settings' runs"
+    )
     parser.add_argument("--duration", default=None, help="injection time, e.g. '30 s'")
     args = parse_with_petsc_options(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
@@ -106,7 +109,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
     study = load_study(ROOT / "studies/lab_azimuth.toml", resolution=args.resolution)
     if args.duration:
         study = study.with_fixed({"injection.duration": args.duration})
-    rows = run_study(study, args.output, comm, groups=args.groups, say=say)
+    rows = run_study(study, args.output, comm, groups=args.groups, force=args.force, say=say)
 
     ours = []
     for row in rows:

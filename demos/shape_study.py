@@ -104,6 +104,9 @@ def main(argv: list[str] | None = None) -> list[dict]:
     parser.add_argument("-o", "--output", default="results/shape_study")
     parser.add_argument("--resolution", default="coarse", help="mesh resolution of the scene")
     parser.add_argument("--groups", type=int, default=1, help="cases run at once")
+    parser.add_argument(
+        "--force", action="store_true", help="run every case again, over other settings' runs"
+    )
     parser.add_argument("--duration", default=None, help="injection time, e.g. '120 s'")
     parser.add_argument("--models", default=None, help="comma-separated subset, e.g. no2,1-1")
     args = parse_with_petsc_options(parser, argv)  # PETSc options too
@@ -115,7 +118,7 @@ def main(argv: list[str] | None = None) -> list[dict]:
         study = study.with_values(tuple(args.models.split(",")))
     if args.duration:
         study = study.with_fixed({"injection.duration": args.duration})
-    rows = run_study(study, args.output, comm, groups=args.groups, say=say)
+    rows = run_study(study, args.output, comm, groups=args.groups, force=args.force, say=say)
 
     ours, metric = pick_metric(rows)
     for row in rows:

@@ -244,6 +244,7 @@ def _study(args: argparse.Namespace) -> int:
 
     from hfcdem.config.units import FieldError
     from hfcdem.workflows.convergence import study_kind
+    from hfcdem.workflows.run import OutputInUse
     from hfcdem.workflows.study import load_study, run_study
 
     comm = MPI.COMM_WORLD
@@ -268,6 +269,9 @@ def _study(args: argparse.Namespace) -> int:
     except ValueError as exc:
         say(f"error: {exc}", err=True)
         return 2
+    except OutputInUse as exc:  # a case directory holds a run with other settings
+        say(f"error: {exc}", err=True)
+        return 3
     return 0
 
 

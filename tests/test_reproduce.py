@@ -1,6 +1,7 @@
 """`hfcdem reproduce`: the report of the four papers, at CI size (two quick cases)."""
 
 import csv
+import dataclasses
 import json
 import math
 
@@ -11,7 +12,8 @@ from mpi4py import MPI
 from hfcdem import references
 from hfcdem.cli import main
 from hfcdem.config.scene import load_scene
-from hfcdem.reproduce.cases import CASES, select_cases
+from hfcdem.reproduce import cases
+from hfcdem.reproduce.cases import CASES, Tier, select_cases
 from hfcdem.reproduce.compare import (
     DEGREE_FIGURE,
     PEAK_MESH_ERROR,
@@ -101,14 +103,70 @@ def test_quick_report_of_sneddon_and_kgd_and_its_resume(shared_tmp_path, capsys)
     assert [c.met for c in kgd.comparisons] == [c["met"] for c in first["comparisons"]]
 
 
-def test_a_failing_case_is_reported_and_the_report_still_written(shared_tmp_path, capsys):
+def test_a_failing_case_is_reported_and_the_report_still_written(
+    shared_tmp_path, capsys, monkeypatch
+):
+    # sneddon's tier with a bad field: its scene cannot be built, the report goes on
+    bad = {"quick": Tier("coarse", fixed={"rock.youngs_modulus": "10 m"})}
+    registry = tuple(dataclasses.replace(c, tiers=bad) if c.name == "sneddon" else c for c in CASES)
+    monkeypatch.setattr(cases, "CASES", registry)
     out = shared_tmp_path / "bad"
-    argv = ["reproduce", "--quick", "--only", "sneddon", "--resolution", "nosuch", "-o", str(out)]
+    argv = ["reproduce", "--quick", "--only", "sneddon", "-o", str(out)]
     assert main(argv) == 4
     (row,) = [r for r in _rows(out / "results.csv") if r["case"] == "sneddon"]
-    assert row["status"] == "failed" and "nosuch" in row["case_note"]
+    assert row["status"] == "failed" and "youngs_modulus" in row["case_note"]
     if MPI.COMM_WORLD.rank == 0:
         assert "sneddon" in capsys.readouterr().err
+
+
+def _files(top):
+    """Every file under ``top``: its bytes and modification time."""
+    files = sorted(p for p in top.rglob("*") if p.is_file())
+    return {p: (p.read_bytes(), p.stat().st_mtime_ns) for p in files}
+
+
+def test_a_resolution_no_case_has_is_refused_before_anything_is_written(shared_tmp_path, capsys):
+    out = shared_tmp_path / "unknown"
+    argv = ["reproduce", "--quick", "-o", str(out)]
+    assert main([*argv, "--only", "sneddon"]) == 0
+    before = _files(out)
+    MPI.COMM_WORLD.barrier()
+    capsys.readouterr()
+    # once, every case of the report was rewritten as failed: sneddon's results lost
+    assert main([*argv, "--only", "griffith", "--resolution", "ultra"]) == 2
+    assert _files(out) == before
+    if MPI.COMM_WORLD.rank == 0:
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1, err
+        assert "--resolution" in err and "'ultra'" in err and "coarse, default" in err
+    with pytest.raises(ValueError, match=r"--resolution: .*'ultra'"):
+        run_reproduction(shared_tmp_path / "never", tier="quick", resolution="ultra")
+    assert not (shared_tmp_path / "never").exists()
+
+
+def test_cases_left_out_by_only_are_read_back_never_run_or_rewritten(shared_tmp_path, capsys):
+    out = shared_tmp_path / "partial"
+    argv = ["reproduce", "--quick", "-o", str(out)]
+    assert main([*argv, "--only", "griffith"]) == 0
+    kept = out / "cases" / "griffith" / "case.json"
+    before = kept.read_bytes(), kept.stat().st_mtime_ns
+    MPI.COMM_WORLD.barrier()
+    capsys.readouterr()
+    # griffith ran at the tier's resolution, coarse: read back, its case.json untouched;
+    # the KGD mesh series cannot be built at coarse: neither tried nor marked failed
+    assert main([*argv, "--only", "sneddon", "--resolution", "coarse"]) == 0
+    assert (kept.read_bytes(), kept.stat().st_mtime_ns) == before
+    assert sorted(p.name for p in (out / "cases").iterdir()) == ["griffith", "sneddon"]
+    listed = {r["case"]: r for r in _rows(out / "results.csv")}
+    assert listed["griffith"]["status"] == "ok" and listed["sneddon"]["status"] == "ok"
+    assert {r["status"] for n, r in listed.items() if n not in ("griffith", "sneddon")} == {
+        "not run"
+    }
+    others = len(select_cases("quick")) - 1
+    if MPI.COMM_WORLD.rank == 0:
+        printed = capsys.readouterr().out
+        assert f"--only: 1 of the tier's {others} other cases read back" in printed
+        assert f"{others - 1} not run yet" in printed
 
 
 def test_bad_choices_name_the_option(shared_tmp_path):

@@ -8,6 +8,7 @@ from mpi4py import MPI
 from hfcdem.cli import main
 from hfcdem.config.scene import set_field as _set
 from hfcdem.config.tables import SceneError
+from hfcdem.workflows.run import OutputInUse
 from hfcdem.workflows.study import case_directory, load_study, numeric, run_study
 
 SCENE = "../meshes/scenes/kgd_strip.toml"
@@ -135,6 +136,66 @@ def test_a_static_study_tables_the_opening_and_converges_in_alpha(shared_tmp_pat
     lines = (out / "results.csv").read_text().splitlines()
     assert lines[0].startswith("value,case,x,max_crack_opening_m,sneddon_centre_relative_error")
     assert (out / "study.png").stat().st_size > 0
+
+
+def _stamps(out):
+    """The modification time of each case's summary.json, by case folder."""
+    return {p.parent.name: p.stat().st_mtime_ns for p in sorted(out.glob("case_*/summary.json"))}
+
+
+def test_a_study_with_other_settings_is_refused_in_the_same_output(study_file, shared_tmp_path):
+    base = load_study(study_file)
+    out = shared_tmp_path / "again"
+    first_dir, second_dir = (case_directory(k, v) for k, v in enumerate(base.values))
+    run_study(base, out)
+    first = _stamps(out)
+    assert set(first) == {first_dir, second_dir}
+    # fewer values, same settings: nothing runs, the tables list the values asked for only
+    # and the dropped case's folder stays
+    rows = run_study(base.with_values(base.values[:1]), out)
+    assert [r["value"] for r in rows] == ["1e-3 m3/s"] and _stamps(out) == first
+    lines = (out / "results.csv").read_text().splitlines()
+    assert len(lines) == 2 and lines[1].startswith("1e-3 m3/s,0,")
+    # other settings: refused before anything runs (once, cases were silently overwritten)
+    shorter = base.with_fixed({"injection.duration": "2 s"}).with_values(base.values[:1])
+    refused = rf"{first_dir} holds a run of .* with other settings.*--force.*another -o"
+    with pytest.raises(OutputInUse, match=refused):
+        run_study(shorter, out)
+    assert _stamps(out) == first
+    assert (out / "results.csv").read_text().splitlines() == lines
+    # --force runs it over; then it is that study's, done and skipped
+    rows = run_study(shorter, out, force=True)
+    assert [r["value"] for r in rows] == ["1e-3 m3/s"]
+    forced = _stamps(out)
+    assert forced[first_dir] != first[first_dir] and forced[second_dir] == first[second_dir]
+    run_study(shorter, out)
+    assert _stamps(out) == forced
+    # overwrite (as the report runs its cases): the changed case runs, the done one is skipped
+    run_study(base, out, overwrite=True)
+    last = _stamps(out)
+    assert last[first_dir] != forced[first_dir] and last[second_dir] == first[second_dir]
+
+
+def test_a_started_run_of_another_scene_is_refused_too(shared_tmp_path):
+    """A run.json alone (a run that died before its summary) still belongs to that run."""
+    study = load_study("studies/sneddon_alpha.toml").with_values((10,))
+    out = shared_tmp_path / "started"
+    case = out / case_directory(0, 10)
+    if MPI.COMM_WORLD.rank == 0:
+        case.mkdir(parents=True)
+        (case / "run.json").write_text('{"scene": "other", "fingerprint": "0123"}')
+    MPI.COMM_WORLD.barrier()
+    with pytest.raises(OutputInUse, match="'other' with other settings"):
+        run_study(study, out)
+    # the command line says it in one line, exit 3
+    assert main(["study", "studies/sneddon_alpha.toml", "--values", "10", "-o", str(out)]) == 3
+    assert not (case / "summary.json").exists()
+    MPI.COMM_WORLD.barrier()
+    if MPI.COMM_WORLD.rank == 0:
+        (case / "run.json").write_text("{not json")
+    MPI.COMM_WORLD.barrier()
+    with pytest.raises(OutputInUse, match=r"'\?' with other"):
+        run_study(study, out)
 
 
 def test_a_case_scene_is_named_for_its_case_not_the_base_scene():

@@ -11,8 +11,10 @@ so in the row's note.  Papers' values live in :mod:`hfcdem.references`.
 
 from __future__ import annotations
 
+import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from hfcdem import references
@@ -544,6 +546,37 @@ def select_cases(tier: str, only: Sequence[str] | None = None) -> list[Case]:
     return [c for c in CASES if tier in c.tiers]
 
 
+def case_resolutions(case: Case, root: Path) -> frozenset[str] | None:
+    """Return the mesh resolutions the case's scene names, with ``default``.
+
+    A study's or convergence study's are those of its scene file, its
+    ``geometry.catalogue`` entry's included.  ``root``: the checkout (where
+    ``case.source`` is).  None when the files cannot be read: the run says why.
+    """
+    from hfcdem.config.catalogue import PRESETS, lookup_preset
+
+    if case.source is None:
+        return frozenset()
+    try:
+        path = root / case.source
+        data = tomllib.loads(path.read_text())
+        if case.kind != "scene":
+            data = tomllib.loads((path.parent / str(data["scene"])).read_text())
+        geometry = data.get("geometry", {})
+        names = set(_named(geometry))
+        if geometry.get("catalogue") in PRESETS:
+            names |= set(_named(lookup_preset(geometry["catalogue"])))
+    except (OSError, KeyError, AttributeError, tomllib.TOMLDecodeError):
+        return None
+    return frozenset({"default", *names})
+
+
+def _named(geometry: Mapping[str, Any]) -> Mapping[str, Any]:
+    """Return the ``mesh.resolutions`` table of a geometry table (empty when it has none)."""
+    named = geometry.get("mesh", {}).get("resolutions", {})
+    return named if isinstance(named, Mapping) else {}
+
+
 __all__ = [
     "CASES",
     "FIDELITIES",
@@ -553,5 +586,6 @@ __all__ = [
     "CaseResult",
     "Comparison",
     "Tier",
+    "case_resolutions",
     "select_cases",
 ]

@@ -23,7 +23,7 @@ from mpi4py import MPI
 from hfcdem.config.units import FieldError
 from hfcdem.io.files import prepare_output_dir, write_json
 from hfcdem.mesh.tagged import MeshingError
-from hfcdem.reproduce.cases import FIDELITIES, Case, Tier, select_cases
+from hfcdem.reproduce.cases import FIDELITIES, Case, Tier, case_resolutions, select_cases
 from hfcdem.reproduce.compare import CaseResult, Comparison
 from hfcdem.reproduce.saturation import TO_SEEPAGE
 from hfcdem.reproduce.watchdog import Watchdog
@@ -88,16 +88,19 @@ def run_reproduction(
 
     The report always covers the whole tier: with ``only``, the tier's other
     cases are read back from ``output`` where they are done (nothing of them
-    runs), and listed as not run where they are not, so a partial rerun never
-    writes a report of a few cases over the whole one.  Only the records of
-    the cases run (or found done) for this call are returned.
+    runs, and their ``case.json`` is left as it is), and listed as not run
+    where they are not, so a partial rerun never writes a report of a few
+    cases over the whole one.  Only the records of the cases run (or found
+    done) for this call are returned.
 
     ``fidelity``: ``scene`` (as each scene file says), ``uniform`` or ``viscous``
     (``solver.fidelity`` of every injection scene) or ``seepage`` (the joints
     fill in time: ``injection.wall_joints``).  ``resolution``: a named mesh
-    resolution for every case instead of the tier's.  ``force``: run again what
-    is done.  ``watchdog_s``: end the process when no progress line comes for
-    this long (:class:`~hfcdem.reproduce.watchdog.Watchdog`; 0: never).  Collective.
+    resolution for every case instead of the tier's; a name none of the cases
+    to run has raises ValueError before anything is written.  ``force``: run
+    again what is done.  ``watchdog_s``: end the process when no progress line
+    comes for this long (:class:`~hfcdem.reproduce.watchdog.Watchdog`; 0:
+    never).  Collective.
     """
     watchdog = Watchdog(watchdog_s)
     printer = say or (lambda msg: None)
@@ -126,6 +129,8 @@ def _run_all(
     cases = select_cases(tier, only)
     if not cases:
         raise ValueError(f"no case of tier {tier!r} among {', '.join(only or [])}")
+    if resolution is not None:
+        _check_resolution(cases, resolution)
     out = prepare_output_dir(output, comm)
     commit = run_tag(comm)["commit"]  # the code this process runs, not HEAD at the end
     clock = _Clock(left=[_estimate(c, c.tiers[tier], out, comm.size) for c in cases])
@@ -137,12 +142,16 @@ def _run_all(
         record = _run_case(
             case, case.tiers[tier], where, comm, fidelity, resolution, False, _quiet, read_only=True
         )
-        records.append(_finish(record, where, out, 0.0, comm, commit))
+        # not named in --only: its case.json stays as its own run left it
+        records.append(_finish(record, where, out, 0.0, comm, commit, write=False))
     if others:
-        back = sum(1 for r in records if r.status != "not run")
+        back = sum(1 for r in records if r.skipped)
+        missing = sum(1 for r in records if r.status == "not modelled")
         say(
             f"--only: {back} of the tier's {len(others)} other cases read back from {out}; "
-            f"{len(others) - back} not run yet (listed as such in the report)"
+            f"{len(others) - back - missing} not run yet"
+            + (f", {missing} not modelled" if missing else "")
+            + " (listed as such in the report)"
         )
     for i, case in enumerate(cases, start=1):
         est = clock.left.pop(0)
@@ -183,6 +192,24 @@ def _run_all(
     say(f"report: {out / 'report.html'} (and report.md, results.csv, figures/)")
     ran = {c.name for c in cases}
     return [r for r in records if r.name in ran]
+
+
+def _check_resolution(cases: Sequence[Case], resolution: str) -> None:
+    """Refuse a resolution none of ``cases`` names, before anything runs or is written.
+
+    A name some of them have is let through: those without it fail alone, in the report.
+    """
+    known: set[str] = set()
+    for case in cases:
+        names = case_resolutions(case, ROOT)
+        if names is None:  # an unreadable file: its run will say so
+            return
+        known |= names
+    if resolution not in known:
+        raise ValueError(
+            f"--resolution: no case to run ({', '.join(c.name for c in cases)}) has a mesh "
+            f"resolution named {resolution!r}; theirs: {', '.join(sorted(known))}"
+        )
 
 
 def _minutes(seconds: float) -> str:
@@ -241,8 +268,10 @@ def _run_case(
             case, tier, where, comm, fidelity, res, force, progress, read_only
         )
     except _NotDone:
-        return _replace(base, status="not run", message="not run yet: name it in --only")
+        return _replace(base, status="not run", message=_NOT_RUN)
     except CASE_ERRORS as exc:
+        if read_only:  # not asked for: it is not done in this form, not failed
+            return _replace(base, status="not run", message=_NOT_RUN)
         return _replace(base, status="failed", message=f"{type(exc).__name__}: {exc}")
     compared: Any = None
     if comm.rank == 0:
@@ -263,6 +292,9 @@ def _run_case(
         figures=tuple(str(where / f) for f in case.figures),
         skipped=skipped,
     )
+
+
+_NOT_RUN = "not run yet: name it in --only"
 
 
 def _replace(record: CaseRecord, **changes: Any) -> CaseRecord:
@@ -309,7 +341,7 @@ def _execute(
     from hfcdem.workflows.convergence import run_convergence as converge
     from hfcdem.workflows.memory import release_memory
     from hfcdem.workflows.run import run_scene, scene_fingerprint
-    from hfcdem.workflows.study import case_done, load_study, run_study
+    from hfcdem.workflows.study import case_done, case_rows, load_study, run_study
 
     assert case.source is not None
     path = ROOT / case.source
@@ -336,7 +368,14 @@ def _execute(
         scenes = tuple(study.case_scene(k) for k in range(len(study.values)))
         skipped = not force and _all_done(study, scenes, where, keep_stopped=True)
         _check_done(skipped, read_only)
-        rows = run_study(study, where, comm, force=force, say=say, keep_stopped=True)
+        if read_only:  # done: its rows as they are, nothing of it rewritten
+            rows = case_rows(study, where)
+        else:
+            # overwrite: the report owns DIR/cases/NAME, and a case whose settings (or the
+            # code's fingerprint of them) changed runs again there, as it always has
+            rows = run_study(
+                study, where, comm, force=force, say=say, keep_stopped=True, overwrite=True
+            )
         sizes = [characteristic_size(sc) for sc in scenes]
         text = _size_text(sizes[0], study.resolution, rows[0].get("cells"))
         if len(set(sizes)) > 1:  # a mesh series: its range
@@ -389,9 +428,18 @@ def _size_text(h: float, resolution: str | None, cells: Any) -> str:
 
 
 def _finish(
-    record: CaseRecord, where: Path, out: Path, spent: float, comm: MPI.Comm, commit: str
+    record: CaseRecord,
+    where: Path,
+    out: Path,
+    spent: float,
+    comm: MPI.Comm,
+    commit: str,
+    write: bool = True,
 ) -> CaseRecord:
-    """Keep the first run's wall time and commit when the case was done before; write case.json."""
+    """Keep the first run's wall time and commit when the case was done before; write case.json.
+
+    ``write``: False for a case only read back (left out by --only): its file is left alone.
+    """
     path = where / "case.json"
     if record.status == "not run":
         return record
@@ -402,7 +450,7 @@ def _finish(
     shown = [str(Path(f).relative_to(out)) for f in record.figures if Path(f).exists()]
     figures = tuple(comm.bcast(shown if comm.rank == 0 else None, root=0))
     record = _replace(record, wall_time_s=spent, figures=figures, commit=commit)
-    if record.status != "not modelled":
+    if write and record.status != "not modelled":
         prepare_output_dir(where, comm)
         write_json(path, _as_json(record), comm)
     return record

@@ -20,7 +20,9 @@ and optional fixed overrides::
 ``hfcdem study STUDY.toml -o DIR`` runs the cases into ``DIR/case_K_VALUE``
 (``case_1_1-1``, ``case_0_30_deg``) one after another, or ``--groups G`` at
 once with the ranks split into G groups.  A case whose directory already holds
-its own finished results is skipped.  Then it
+its own finished results is skipped; one that holds another scene's run (the
+study's settings changed) stops the study before anything runs, unless
+``--force``.  Then it
 writes ``results.csv`` and ``study.png`` (breakdown or peak pressure and fracture
 degree against the swept value).
 """
@@ -244,12 +246,21 @@ def run_study(
     force: bool = False,
     say: Callable[[str], None] | None = None,
     keep_stopped: bool = False,
+    overwrite: bool = False,
 ) -> list[dict[str, Any]]:
     """Run every case not already done; return one result row per case.
 
-    ``keep_stopped``: a case that stopped (its solver gave up) counts as done.
+    Raises :class:`~hfcdem.workflows.run.OutputInUse` before anything runs when
+    a case's directory holds a run (finished or not) of another scene, such as
+    the same study with other settings, unless ``force`` (run every case again)
+    or ``overwrite`` (run over such cases, skip those done).  ``keep_stopped``:
+    a case that stopped (its solver gave up) counts as done.  ``results.csv``
+    and ``study.png`` list the study's values only, whatever other case
+    directories ``output`` holds.
     """
     say = say or (lambda msg: None)
+    if not (force or overwrite):
+        _claim_cases(study, Path(output), comm)
     out = prepare_output_dir(output, comm)
     run_cases(study, out, comm, groups=groups, force=force, keep_stopped=keep_stopped)
     rows = case_rows(study, out)
@@ -258,6 +269,46 @@ def run_study(
     comm.barrier()
     say(f"{study.name}: {len(rows)} cases; results in {out}/results.csv and study.png")
     return rows
+
+
+def _claim_cases(study: CaseSource, out: Path, comm: MPI.Comm) -> None:
+    """Refuse to run over another scene's run in a case directory (collective).
+
+    Rank 0 decides and tells the others, so that every rank raises or none does.
+    """
+    from hfcdem.workflows.run import OutputInUse, scene_fingerprint
+
+    problem = None
+    if comm.rank == 0:
+        for k, value in enumerate(study.values):
+            case_dir = out / case_directory(k, value)
+            previous = _run_record(case_dir)
+            if previous is None:
+                continue
+            if previous.get("fingerprint") != scene_fingerprint(study.case_scene(k)):
+                problem = (
+                    f"{case_dir} holds a run of {previous.get('scene', '?')!r} with other "
+                    "settings (or of another scene); use --force to overwrite, or another -o"
+                )
+                break
+    problem = comm.bcast(problem, root=0)
+    if problem:
+        raise OutputInUse(problem)
+
+
+def _run_record(case_dir: Path) -> dict[str, Any] | None:
+    """Return ``case_dir``'s run.json (written as a run starts); None when there is none.
+
+    One that cannot be read is an empty dict: another run's, as far as anyone can tell.
+    """
+    path = case_dir / "run.json"
+    if not path.exists():
+        return None
+    try:
+        record = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError):
+        return {}
+    return record if isinstance(record, dict) else {}
 
 
 def run_cases(
