@@ -68,6 +68,11 @@ def test_bad_study_input_is_named_before_running(shared_tmp_path, study_file):
     _write(bad, study_file.read_text().replace("[sweep]", "colour = 1\n[sweep]"))
     with pytest.raises(SceneError, match="colour"):
         load_study(bad)
+    # a case's bad key: the case, then the key, with no empty slot between
+    with pytest.raises(SceneError) as err:
+        load_study(study_file).with_fixed({"rock.tensile_strenght": "1 MPa"}).case_scene(0)
+    assert str(err.value).startswith("case 0 (") and ": :" not in str(err.value)
+    assert "rock.tensile_strenght: unknown key" in str(err.value)
 
 
 def test_keys_moved_with_the_swept_one(shared_tmp_path, study_file):

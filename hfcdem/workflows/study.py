@@ -107,9 +107,8 @@ class Study:
                 str(self.scene_path),
             )
         except FieldError as exc:
-            raise SceneError(
-                f"case {k} ({self.parameter} = {self.values[k]!r}): {exc.path}", exc.reason
-            ) from None
+            where = f"case {k} ({self.parameter} = {self.values[k]!r})"
+            raise SceneError(f"{where}: {exc.path}" if exc.path else where, exc.reason) from None
 
 
 def load_study(path: str | Path, resolution: str | None = None) -> Study:
