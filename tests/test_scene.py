@@ -367,3 +367,27 @@ def test_dataclasses_validate_on_construction():
     sizing = MeshSizing(0.006, 0.25, circle_elements=32)
     assert sizing.wall_size(0.0235) == pytest.approx(math.pi * 0.0235 / 32)
     assert sizing.wall_size(0.5) == 0.006
+
+
+def test_a_mesh_field_set_explicitly_wins_over_a_named_resolution():
+    from hfcdem.config.scene import apply_overrides
+    from hfcdem.workflows.study import load_study
+
+    sneddon = "meshes/scenes/sneddon_plate.toml"
+    assert load_scene(sneddon, "coarse").geometry.mesh.size_far == pytest.approx(0.1)
+    # once the coarse table's 100 mm replaced it silently
+    set_far = load_scene(sneddon, "coarse", overrides={"geometry.mesh.size_far": "1 m"})
+    assert set_far.geometry.mesh.size_far == pytest.approx(1.0)
+    assert set_far.geometry.mesh.size == pytest.approx(0.01)  # the rest is still coarse
+    graded = load_scene(sneddon, "coarse", overrides={"geometry.mesh.grading": 0.4})
+    assert graded.geometry.mesh.grading == pytest.approx(0.4)
+    with pytest.raises(SceneError, match="no resolution named 'ultra'"):
+        load_scene(sneddon, "ultra", overrides={"geometry.mesh.size": "1 mm"})
+    # a resolution of the catalogue entry's, not the scene's
+    doc = {"geometry": {"catalogue": "borehole_plate"}}
+    apply_overrides(doc, {"geometry.mesh.size": "4 mm"}, "coarse")
+    geometry, _, chosen = parse_geometry(doc["geometry"], resolution="coarse")
+    assert chosen == "coarse" and geometry.mesh.size == pytest.approx(0.004)
+    # a study's fixed fields too (sneddon_alpha's 1 m far size at coarse)
+    study = load_study("studies/sneddon_alpha.toml", "coarse")
+    assert study.case_scene(0).geometry.mesh.size_far == pytest.approx(1.0)

@@ -538,6 +538,43 @@ def set_field(doc: dict[str, Any], dotted: str, value: Any) -> None:
             node = node.setdefault(key, {})
 
 
+def apply_overrides(
+    doc: dict[str, Any], overrides: Mapping[str, Any], resolution: str | None
+) -> None:
+    """Set each dotted key of ``overrides`` in ``doc`` (:func:`set_field`).
+
+    A named resolution's table replaces ``geometry.mesh``'s own fields, so a
+    ``geometry.mesh.FIELD`` override is also written into the chosen
+    resolution's table where that table (the scene's or its catalogue entry's)
+    sets FIELD: given explicitly, it wins at any resolution.
+    """
+    for key, value in overrides.items():
+        set_field(doc, key, value)
+        parts = key.split(".")
+        if value is None or len(parts) != 3 or parts[:2] != ["geometry", "mesh"]:
+            continue
+        if resolution is None or resolution == "default" or parts[2] == "resolutions":
+            continue
+        if parts[2] in _named_resolution(doc.get("geometry", {}), resolution):
+            set_field(doc, f"geometry.mesh.resolutions.{resolution}.{parts[2]}", value)
+
+
+def _named_resolution(geometry: Any, resolution: str) -> Mapping[str, Any]:
+    """Return the fields the named ``resolution`` sets (the geometry table or its catalogue's)."""
+    if not isinstance(geometry, Mapping):
+        return {}
+    tables = [geometry]
+    if geometry.get("catalogue") in catalogue.PRESETS:
+        tables.insert(0, catalogue.lookup_preset(geometry["catalogue"]))
+    fields: dict[str, Any] = {}
+    for table in tables:
+        mesh = table.get("mesh", {})
+        named = mesh.get("resolutions", {}) if isinstance(mesh, Mapping) else {}
+        chosen = named.get(resolution, {}) if isinstance(named, Mapping) else {}
+        fields |= dict(chosen) if isinstance(chosen, Mapping) else {}
+    return fields
+
+
 def load_scene(
     path: str | Path,
     resolution: str | None = None,
@@ -557,8 +594,7 @@ def load_scene(
         raise SceneError("", f"cannot read scene file {p}: {exc.strerror}") from None
     except tomllib.TOMLDecodeError as exc:
         raise SceneError("", f"{p} is not valid TOML: {exc}") from None
-    for key, value in (overrides or {}).items():
-        set_field(data, key, value)
+    apply_overrides(data, overrides or {}, resolution)
     try:
         return parse_scene(data, p.stem, resolution, size, str(p))
     except FieldError as exc:
@@ -567,6 +603,7 @@ def load_scene(
 
 __all__ = [
     "RESERVED_SECTIONS",
+    "apply_overrides",
     "load_scene",
     "parse_geometry",
     "parse_scene",

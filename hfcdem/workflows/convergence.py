@@ -78,7 +78,7 @@ from mpi4py import MPI
 
 from hfcdem.config.geometry import PerforatedBlock, Scene
 from hfcdem.config.plates import BoreholeSquare, KGDStrip
-from hfcdem.config.scene import parse_scene
+from hfcdem.config.scene import apply_overrides, parse_scene
 from hfcdem.config.scene import set_field as _set
 from hfcdem.config.tables import SceneError
 from hfcdem.config.units import FieldError
@@ -170,10 +170,11 @@ class ConvergenceStudy:
     def case_scene(self, k: int) -> Scene:
         """Return the validated scene of case ``k``; errors name the case and the key."""
         doc = copy.deepcopy(dict(self.base))
-        for key, value in self.fixed.items():
-            _set(doc, key, value)
         value = self.values[k]
         resolution, size = self.resolution, None
+        if self.parameter == "resolution":
+            resolution = str(value)
+        apply_overrides(doc, self.fixed, resolution)
         try:
             if self.parameter == "resolution":
                 resolution = str(value)

@@ -42,8 +42,7 @@ from typing import Any, Protocol
 from mpi4py import MPI
 
 from hfcdem.config.geometry import Scene
-from hfcdem.config.scene import parse_scene
-from hfcdem.config.scene import set_field as _set
+from hfcdem.config.scene import apply_overrides, parse_scene
 from hfcdem.config.tables import SceneError
 from hfcdem.config.units import UNITS, FieldError, parse_quantity
 from hfcdem.io.files import prepare_output_dir
@@ -87,11 +86,12 @@ class Study:
     def case_document(self, k: int) -> dict[str, Any]:
         """Return the scene document of case ``k`` (overrides applied)."""
         doc = copy.deepcopy(dict(self.base))
-        for key, value in self.fixed.items():
-            _set(doc, key, value)
-        _set(doc, self.parameter, self.values[k])
-        for key, values in self.together.items():
-            _set(doc, key, values[k])
+        changes = {
+            **self.fixed,
+            self.parameter: self.values[k],
+            **{key: values[k] for key, values in self.together.items()},
+        }
+        apply_overrides(doc, changes, self.resolution)
         # named for the case, not the base scene: pictures and summaries say which case they show
         doc["name"] = f"{self.name}_{case_directory(k, self.values[k])}"
         return doc
