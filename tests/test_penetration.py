@@ -14,15 +14,25 @@ import math
 
 import numpy as np
 import pytest
-from borehole import WALL, A, borehole_plate, borehole_solid
+from borehole import SH, SHMIN, T0, WALL, A, borehole_plate, borehole_solid
 from mpi4py import MPI
 
-from hfcdem.config.materials import Fluid
-from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakdown
+from hfcdem.config.materials import ElasticMaterial, Fluid, InSituStress, InterfaceModel
+from hfcdem.coupling import events
+from hfcdem.coupling.events import check_small_displacement, switch_contacts
+from hfcdem.coupling.penetration import (
+    CavityPumping,
+    PressureRamp,
+    excavation_loads,
+    ramp_breakdown,
+    settle_excavation,
+)
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
+from hfcdem.solid.fragments import Fragments
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import CascadeStopped
+from hfcdem.solvers import ValidityLimit
 
 FLUID = Fluid(viscosity=1.0)
 APERTURE = 5e-6
@@ -35,6 +45,33 @@ def plate():
 
 def _solid(tmesh) -> CDEMSolid:
     return borehole_solid(tmesh)
+
+
+def _weak_solid(tmesh) -> CDEMSolid:
+    """The borehole with Weibull m = 3 strengths (seed 0, the same mean): some weak facets.
+
+    At the wall, where the hoop stress reaches 48 MPa, weak ones fail on excavation
+    and cut a wedge loose: a breakout.
+    """
+    return CDEMSolid(
+        tmesh,
+        ElasticMaterial(20e9, 0.25),
+        InSituStress(sh_max=SH, sh_min=SHMIN, sv=SH),
+        InterfaceModel(
+            alpha=100,
+            tensile_strength=T0,
+            cohesion=60e6,
+            friction_angle=30,
+            weibull_modulus=3.0,
+            break_rule="all",
+        ),
+        zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
+        fixed=tmesh.facet_groups("outer"),
+    )
+
+
+def _global(solid: CDEMSolid, mask: np.ndarray) -> int:
+    return int(solid.comm.allreduce(int(np.count_nonzero(mask & solid.owned)), op=MPI.SUM))
 
 
 def _static_first_break(tmesh, joints_wet: bool) -> float:
@@ -143,6 +180,63 @@ def test_a_reduced_solid_ramps_with_its_whole_zone_free(plate):
     assert solid.comm.allreduce(bool(np.all(solid.band.free)), op=MPI.LAND)
     full = _ramp(plate, 1e6, steps=80)
     assert reduced.pressure == pytest.approx(full.pressure, rel=2e-4)  # measured 9.8e-5
+
+
+def test_a_wedge_the_excavation_cuts_loose_is_debris_and_the_ramp_runs(plate):
+    """Weak facets break on excavation: a breakout at the wall, then the ramp's first break.
+
+    Settled as a pumped step settles (contacts switched before the strength is
+    checked, the wedge cut loose from the wall released as debris), 25 facets
+    break, all in the first ring of cells, and 24 faces round the debris take
+    the cavity's pressure.  Before (2026-12), the settle checked the strength
+    while new tensile breaks were still open, and kept breaking while the
+    loose wedge flew 5.7 km on its residual springs: 951 of the zone's 952
+    interfaces broke at 0 MPa and no joint was left for the ramp ("no joint
+    broke up to 25 MPa").
+    """
+    solid = _weak_solid(plate)
+    run = ramp_breakdown(solid, WALL, FLUID, APERTURE, PressureRamp(1e6, 25e6, steps=100))
+    assert run.stopped is None and run.initial_failures == 25  # measured
+    broken = (solid.state != FacetState.INTACT) & solid.owned
+    assert np.all(np.hypot(solid.midpoints[broken, 0], solid.midpoints[broken, 1]) < 1.2 * A)
+    assert _global(solid, solid.released) == 24
+    # the ramp breaks the rock beside the breakout, far below the intact wall's 14.4 MPa
+    assert run.pressure == pytest.approx(3.4655e6, rel=1e-4)  # measured 3.46554 MPa
+    assert 0.0 < run.wet_fraction < 0.05
+
+
+def test_the_settled_excavation_is_the_state_a_step_starts_from(plate):
+    """Nothing left to switch or break, no block past the small-displacement limit.
+
+    A pumped step starts with a free round of contact switches: were the
+    settle's closing-only rounds to hold faces shut or stuck that the free round
+    lets slip, the first step would go on breaking the excavation at the first
+    pressure step (Weibull m = 2 on the scene's plate: 62 interfaces, not a first
+    break at 0.21 MPa).  A wedge cut loose that is not released as debris
+    stops the settle at the validity limit instead of breaking everything.
+    """
+    solid = _weak_solid(plate)
+    loads = excavation_loads(solid, WALL, 0.0, None)
+    assert settle_excavation(solid, loads, fragments=Fragments(solid, WALL)) == 25
+    settled = loads()
+    solid.solve(settled)
+    check_small_displacement(solid, 0.0)
+    assert switch_contacts(solid, settled, only_closing=False) == 0
+    ratio, _ = solid.overstress(settled)
+    assert solid.comm.allreduce(float(ratio.max(initial=0.0)), op=MPI.MAX) < 1.0
+    bare = _weak_solid(plate)
+    with pytest.raises(ValidityLimit, match="block cut out by broken faces"):
+        settle_excavation(bare, excavation_loads(bare, WALL, 0.0, None))
+    assert 0 < sum(bare.broken_counts().values()) < 30  # where it stopped
+
+
+def test_an_excavation_past_the_validity_limit_stops_the_ramp_with_a_message(plate, monkeypatch):
+    monkeypatch.setattr(events, "LOOSE_JUMP", 0.0)  # any broken face parting is too far
+    run = ramp_breakdown(
+        _weak_solid(plate), WALL, FLUID, APERTURE, PressureRamp(1e6, 25e6, steps=10)
+    )
+    assert run.stopped.startswith("the excavated rock fails before the ramp: at t = 0 s")
+    assert run.initial_failures == 1 and run.pressure is None and run.history == []
 
 
 def test_bad_input(plate):

@@ -19,7 +19,8 @@ from mpi4py import MPI
 
 import hfcdem.coupling.pumping as pumping_module
 from hfcdem import analytic
-from hfcdem.config.materials import Fluid
+from hfcdem.config.materials import ElasticMaterial, Fluid, InSituStress, InterfaceModel
+from hfcdem.coupling import events
 from hfcdem.coupling.penetration import (
     CavityPumping,
     excavation_loads,
@@ -31,6 +32,7 @@ from hfcdem.coupling.pumping import (
     facet_openings,
     pump_with_seepage,
 )
+from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
 from hfcdem.solid.interfaces import FacetState
 from hfcdem.solid.states import SLIP, CascadeStopped
@@ -155,14 +157,17 @@ def test_what_the_excavation_breaks_is_settled_under_the_loads_the_run_starts_fr
     agree (measured 6.9e-8 apart).  Before (2026-12-06) the ramp's settle took
     the pore fluid off every broken face and ran through the zone (950 facets),
     and the pumped run's gave its cracks the cavity pressure only after its
-    settle (2 facets, then a first break at 8.81 MPa).
+    settle (2 facets, then a first break at 8.81 MPa).  Two break: until the
+    settle switched contacts before its strength check, as a pumped step does,
+    the two beside them broke too, against the first two's faces still open
+    (a tensile break starts open; the rock presses these shut).
     """
     pc, p0 = 8e6, 10.5e6
     pumping = CavityPumping(Q, 40.0, steps=100, initial_pressure=pc, joint_pressure=p0)
     solid = _solid(plate)
     loads = excavation_loads(solid, WALL, pc, p0)
     broken = settle_excavation(solid, loads)
-    assert broken == 4  # measured
+    assert broken == 2  # measured (4 checking the strength first)
     settled = loads()
     crack = np.asarray(settled.crack_pressure)
     intact = solid.state == FacetState.INTACT
@@ -178,6 +183,59 @@ def test_what_the_excavation_breaks_is_settled_under_the_loads_the_run_starts_fr
     assert pc < ramp.pressure < p0
     with pytest.raises(ValueError, match="joint_pressure"):
         CavityPumping(Q, 40.0, joint_pressure=-1.0)
+
+
+def _weak_solid(tmesh) -> CDEMSolid:
+    """The borehole with Weibull m = 3 strengths (seed 0): a wedge breaks out on excavation."""
+    model = InterfaceModel(
+        alpha=100,
+        tensile_strength=T0,
+        cohesion=60e6,
+        friction_angle=30,
+        weibull_modulus=3.0,
+        break_rule="all",
+    )
+    return CDEMSolid(
+        tmesh,
+        ElasticMaterial(20e9, 0.25),
+        InSituStress(sh_max=SH, sh_min=SHMIN, sv=SH),
+        model,
+        zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
+        fixed=tmesh.facet_groups("outer"),
+    )
+
+
+def test_a_wedge_cut_loose_on_excavation_is_debris_before_pumping(plate):
+    """The excavation's breakout is settled and released before the first step.
+
+    25 facets break in the first ring of cells at the wall and cut 19 cells
+    loose: debris, which the cavity's fluid surrounds.  The first break of the
+    pumping comes at 3.25 MPa, not on the first step, and frees one more.  Before (2026-12), the
+    settle broke on while the wedge flew on its residual springs: every
+    interface broke at 0 MPa, the debris took the whole zone, and the cavity
+    ran dry.
+    """
+    lines = []
+    pumping = CavityPumping(Q, 40.0, steps=100, until_first_break=True)
+    run = pump_with_seepage(
+        _weak_solid(plate), WALL, Fluid(viscosity=1.0), 5e-6, pumping, progress=lines.append
+    )
+    assert run.stopped is None and not run.validity_limit
+    assert run.initial_failures == 25 and run.debris_cells == 19 + 1  # measured
+    assert run.first_pressure == pytest.approx(3.2478e6, rel=1e-4)  # measured 3.24780 MPa
+    assert run.first_time > 5 * pumping.dt  # the eighth step (measured 3.208 s)
+    if MPI.COMM_WORLD.rank == 0:
+        assert any(line.startswith("  t 0 s: 19 cell(s) cut loose") for line in lines)
+
+
+def test_an_excavation_past_the_validity_limit_stops_before_pumping(plate, monkeypatch):
+    """A block the settle cuts loose that moves too far: a validity limit, with its count."""
+    monkeypatch.setattr(events, "LOOSE_JUMP", 0.0)  # any broken face parting is too far
+    pumping = CavityPumping(Q, 40.0, steps=10)
+    run = pump_with_seepage(_weak_solid(plate), WALL, Fluid(viscosity=1.0), 5e-6, pumping)
+    assert run.validity_limit and run.steps == 0 and run.history == []
+    assert run.stopped.startswith("the excavated rock is past the validity limit before pumping")
+    assert run.initial_failures == 1 and run.first_pressure is None
 
 
 def test_a_block_moving_out_of_the_rock_ends_the_run_at_its_validity_limit(plate, monkeypatch):

@@ -71,6 +71,7 @@ from hfcdem.coupling.penetration import (
     excavation_loads,
     illinois_root,
     settle_excavation,
+    settled_failures,
 )
 from hfcdem.coupling.stepping import StepController
 from hfcdem.flow.apertures import JointAperture, network_apertures
@@ -250,12 +251,18 @@ def pump_with_seepage(
     for name in (*cavity, *supports):
         solid.tmesh.facet_tag(name)  # clear error for unknown groups
     solid.free_interfaces(np.ones(solid.num_facets, dtype=bool))  # (0 in the full mode)
-    try:
+    try:  # blocks the excavation cuts loose from the walls are debris, as in a step
         start = excavation_loads(solid, cavity, pumping.initial_pressure, pumping.joint_pressure)
-        initial_failures = settle_excavation(solid, start)
+        initial_failures = settle_excavation(
+            solid, start, fragments=Fragments(solid, cavity), supports=supports
+        )
     except CascadeStopped as stop:
         why = f"the excavated rock fails before pumping: {stop}"
         return _stopped_before_pumping(pumping, stop.broken, why)
+    except ValidityLimit as stop:
+        why = f"the excavated rock is past the validity limit before pumping: {stop}"
+        failures = settled_failures(solid, stop)
+        return _stopped_before_pumping(pumping, failures, why, validity_limit=True)
     try:
         run = _PumpedCavity(
             solid, tuple(cavity), fluid, aperture, pumping, tuple(supports), contact_hysteresis
@@ -391,10 +398,11 @@ class _PumpedCavity:
             self.debris_news.append(
                 f"  t {t:.4g} s: {held} loose cell(s) against a supporting wall held by it"
             )
-        if count:
+        if count or cells > self.debris_cells:  # (count 0: released by the excavation's settle)
+            faces = f"{count} broken faces" if count else "the broken faces"
             self.debris_news.append(
                 f"  t {t:.4g} s: {cells - self.debris_cells} cell(s) cut loose from the wall "
-                f"are debris: {count} broken faces around them take the cavity pressure"
+                f"are debris: {faces} around them take the cavity pressure"
             )
             self.debris_cells = cells
         return count
