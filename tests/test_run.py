@@ -570,7 +570,7 @@ def test_a_tunnel_run_records_sigma_xx_at_its_first_crack(shared_tmp_path):
     assert sum(first["interfaces_by_place"].values()) == first["interfaces"]
 
 
-def test_a_strength_length_below_the_cells_and_an_unused_fidelity_are_said():
+def test_a_strength_length_below_the_cells_an_unused_fidelity_and_tension_are_said():
     from hfcdem.workflows.run import _warn_unresolved
 
     def said(path, **sets):
@@ -583,6 +583,7 @@ def test_a_strength_length_below_the_cells_and_an_unused_fidelity_are_said():
     )
     assert said(BOREHOLE, **{"rock.strength_length": "12 mm"}) == ""
     assert said(BOREHOLE) == ""
+    assert "stress.sh_min = -5 MPa is tension" in said(BOREHOLE, **{"stress.sh_min": "-5 MPa"})
     seepage = "meshes/scenes/borehole_seepage.toml"
     assert "solver.fidelity is not used" in said(seepage, **{"solver.fidelity": "viscous"})
     assert said(seepage) == ""

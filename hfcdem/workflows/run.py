@@ -183,10 +183,20 @@ def wall_area(tmesh: Any, groups: tuple[str, ...]) -> float:
 
 
 def _warn_unresolved(scene: Scene, say: Callable[[str], None]) -> None:
-    """Say when a scene asks for what its mesh or its rung does not do."""
+    """Say when a scene asks for what its mesh or its rung does not do, or for tension."""
     from hfcdem.workflows.convergence import characteristic_size
 
     phys = scene.physics
+    pulled = [
+        f"stress.{key} = {getattr(phys.stress, key) / 1e6:.4g} MPa"
+        for key in ("sh_max", "sh_min", "sv")
+        if getattr(phys.stress, key) < 0.0
+    ]
+    if pulled:
+        say(
+            f"warning: {', '.join(pulled)} is tension (in-situ stresses are compression "
+            "positive): the rock is pulled apart before any injection"
+        )
     length = phys.interfaces.strength_length
     h = characteristic_size(scene)
     if 0.0 < length < h:
