@@ -33,15 +33,26 @@ def borehole_plate(comm: MPI.Comm = MPI.COMM_WORLD, wall_division: int = 5) -> T
 
 
 def borehole_solid(
-    tmesh: TaggedMesh, mode: str = "full", walls: dict[str, float] | None = None
+    tmesh: TaggedMesh,
+    mode: str = "full",
+    walls: dict[str, float] | None = None,
+    weibull_modulus: float | None = None,
 ) -> CDEMSolid:
-    """Return the CDEM solid of the borehole (``mode`` full or reduced; drilled ``walls``)."""
+    """Return the CDEM solid of the borehole (``mode`` full or reduced; drilled ``walls``).
+
+    ``weibull_modulus``: strengths scattered per facet (seed 0, the same mean).
+    """
     return CDEMSolid(
         tmesh,
         ElasticMaterial(20e9, 0.25),
         InSituStress(sh_max=SH, sh_min=SHMIN, sv=SH),
         InterfaceModel(
-            alpha=100, tensile_strength=T0, cohesion=60e6, friction_angle=30, break_rule="all"
+            alpha=100,
+            tensile_strength=T0,
+            cohesion=60e6,
+            friction_angle=30,
+            weibull_modulus=weibull_modulus,
+            break_rule="all",
         ),
         zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
         fixed=tmesh.facet_groups("outer"),

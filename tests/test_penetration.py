@@ -14,10 +14,10 @@ import math
 
 import numpy as np
 import pytest
-from borehole import SH, SHMIN, T0, WALL, A, borehole_plate, borehole_solid
+from borehole import WALL, A, borehole_plate, borehole_solid
 from mpi4py import MPI
 
-from hfcdem.config.materials import ElasticMaterial, Fluid, InSituStress, InterfaceModel
+from hfcdem.config.materials import Fluid
 from hfcdem.coupling import events
 from hfcdem.coupling.events import check_small_displacement, switch_contacts
 from hfcdem.coupling.penetration import (
@@ -53,21 +53,7 @@ def _weak_solid(tmesh) -> CDEMSolid:
     At the wall, where the hoop stress reaches 48 MPa, weak ones fail on excavation
     and cut a wedge loose: a breakout.
     """
-    return CDEMSolid(
-        tmesh,
-        ElasticMaterial(20e9, 0.25),
-        InSituStress(sh_max=SH, sh_min=SHMIN, sv=SH),
-        InterfaceModel(
-            alpha=100,
-            tensile_strength=T0,
-            cohesion=60e6,
-            friction_angle=30,
-            weibull_modulus=3.0,
-            break_rule="all",
-        ),
-        zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
-        fixed=tmesh.facet_groups("outer"),
-    )
+    return borehole_solid(tmesh, weibull_modulus=3.0)
 
 
 def _global(solid: CDEMSolid, mask: np.ndarray) -> int:

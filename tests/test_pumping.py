@@ -19,7 +19,7 @@ from mpi4py import MPI
 
 import hfcdem.coupling.pumping as pumping_module
 from hfcdem import analytic
-from hfcdem.config.materials import ElasticMaterial, Fluid, InSituStress, InterfaceModel
+from hfcdem.config.materials import Fluid
 from hfcdem.coupling import events
 from hfcdem.coupling.penetration import (
     CavityPumping,
@@ -187,22 +187,7 @@ def test_what_the_excavation_breaks_is_settled_under_the_loads_the_run_starts_fr
 
 def _weak_solid(tmesh) -> CDEMSolid:
     """The borehole with Weibull m = 3 strengths (seed 0): a wedge breaks out on excavation."""
-    model = InterfaceModel(
-        alpha=100,
-        tensile_strength=T0,
-        cohesion=60e6,
-        friction_angle=30,
-        weibull_modulus=3.0,
-        break_rule="all",
-    )
-    return CDEMSolid(
-        tmesh,
-        ElasticMaterial(20e9, 0.25),
-        InSituStress(sh_max=SH, sh_min=SHMIN, sv=SH),
-        model,
-        zone=lambda x: np.hypot(x[0], x[1]) < 6 * A,
-        fixed=tmesh.facet_groups("outer"),
-    )
+    return borehole_solid(tmesh, weibull_modulus=3.0)
 
 
 def test_a_wedge_cut_loose_on_excavation_is_debris_before_pumping(plate):

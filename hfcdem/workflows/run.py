@@ -235,10 +235,9 @@ def build_fracture(scene: Scene, solid: CDEMSolid) -> HydraulicFracture:
     """Build the coupled fluid-solid model of a scene."""
     phys = scene.physics
     names = solid.tmesh.facet_names
+    _check_loaded_walls(scene, names)
     cavity = pressurised_groups(names, phys.wellbore)
     point = getattr(scene.geometry, "injection_point", None)
-    if not cavity and point is None:
-        raise SceneError("geometry", "the scene has no wellbore, tunnel or injection point")
     inlet = None if cavity or point is None else tuple(point[: solid.gdim])
     settings = FlowSettings(
         cavity=cavity,
