@@ -149,7 +149,7 @@ def _run(args: argparse.Namespace) -> int:
             f"{scene.name}: first break "
             + (
                 f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s ({first['mode']})"
-                if bd
+                if bd is not None
                 else "not reached"
             )
             + f", {summary['joints_holding_pressure']:.1%} of the joints holding pressure, "
@@ -180,10 +180,14 @@ def _run(args: argparse.Namespace) -> int:
             f"{scene.name}: breakdown "
             + (
                 f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s"
-                if bd
+                if bd is not None
                 else f"not reached (pressure still at its peak {peak:.2f} MPa)"
             )
-            + (f", first break {fc:.2f} MPa ({summary['first_crack']['mode']})" if fc else "")
+            + (
+                f", first break {fc:.2f} MPa ({summary['first_crack']['mode']})"
+                if fc is not None
+                else ""
+            )
             + f", {summary['tensile_failures']} tensile / {summary['shear_failures']} shear, "
             f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
         )
@@ -199,13 +203,20 @@ def _run(args: argparse.Namespace) -> int:
     return _exit_code(summary)
 
 
+def first_crack_pressure_words(summary: dict[str, Any]) -> str:
+    """Say the first crack's pressure, as a range where no step landed on it."""
+    low = summary["first_crack_pressure_MPa"]
+    high = summary.get("first_crack_pressure_bound_MPa")
+    if high is None or f"{high:.2f}" == f"{low:.2f}":
+        return f"{low:.2f} MPa"
+    return f"between {low:.2f} and {high:.2f} MPa (no step landed on it)"
+
+
 def first_crack_words(summary: dict[str, Any]) -> str:
     """Say a run's first crack: pressure, time, place, distance from the wellbore wall, mode."""
     first = summary.get("first_crack") or {}
-    said = [
-        f"first crack {summary['first_crack_pressure_MPa']:.2f} MPa at "
-        f"{summary['first_crack_time_s']:.4g} s"
-    ]
+    when = summary["first_crack_time_s"]
+    said = [f"first crack {first_crack_pressure_words(summary)} at {when:.4g} s"]
     where = first.get("distance_from_wellbore_wall_m")
     if first.get("place"):
         said.append(str(first["place"]))

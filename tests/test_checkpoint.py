@@ -42,7 +42,8 @@ def test_a_missing_table_is_named():
 
 
 def test_the_checkpoint_layout():
-    assert SCALARS[0] == "t" and "_last_ratio" in SCALARS and len(SCALARS) == 12
+    assert SCALARS[0] == "t" and "_last_ratio" in SCALARS and len(SCALARS) == 13
+    assert "first_break_pressure" in SCALARS  # the first crack's upper bound survives a resume
     solid = tiny_solid()
     data = checkpoint_data({"t": 1.0}, solid, _fluid())
     assert list(data) == ["scalars", "interfaces", "band", "content", "wet_since", "pressure"]

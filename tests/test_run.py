@@ -8,7 +8,7 @@ import pytest
 from mpi4py import MPI
 
 from hfcdem.analytic import hubbert_willis_breakdown, kgd_viscosity
-from hfcdem.cli import main
+from hfcdem.cli import first_crack_pressure_words, main
 from hfcdem.config.scene import load_scene, parse_scene
 from hfcdem.config.tables import SceneError
 from hfcdem.io.series import read_pvd
@@ -68,6 +68,8 @@ def test_borehole_scene_breaks_at_the_wall_near_hubbert_willis(shared_tmp_path):
     assert summary["initial_failures"] == 0
     error = summary["first_crack_pressure_MPa"] * 1e6 / hw - 1
     assert -0.33 < error < -0.29, error
+    # a step landed on it: the pressure it broke at is the landed state's
+    assert summary["first_crack_pressure_bound_MPa"] == summary["first_crack_pressure_MPa"]
     assert summary["shear_failures"] == 0 and summary["tensile_failures"] > 0
     angle = np.degrees(np.arctan2(np.abs(first.midpoints[:, 1]), np.abs(first.midpoints[:, 0])))
     assert np.all(angle < 5.0), angle  # along SH (x), on both sides of the borehole
@@ -412,6 +414,9 @@ def test_a_stopped_run_resumes_where_it_stopped(shared_tmp_path):
     # what happened before the stop is still counted
     first = json.loads((straight / "summary.json").read_text())
     assert summary["first_crack"]["point_m"] == pytest.approx(first["first_crack"]["point_m"])
+    assert summary["first_crack_pressure_bound_MPa"] == pytest.approx(
+        first["first_crack_pressure_bound_MPa"], rel=1e-9
+    )
     assert summary["initial_failures"] == first["initial_failures"]
     assert summary["rebuilds"] >= first["rebuilds"]
     causes = summary["rebuild_causes"]  # kept through the checkpoint, plus the resume
@@ -536,9 +541,16 @@ def test_summary_holds_the_resolved_scene(shared_tmp_path):
     assert resolved["physics"]["duration"] == pytest.approx(1.0)
     assert resolved["physics"]["rock"]["youngs_modulus"] == pytest.approx(25e9)
     assert resolved["geometry"]  # every geometry field, defaults filled in
-    # zero toughness: the path breaks in the first step, from the initial 0 MPa
+    # zero toughness: the path breaks in the first step, from the initial 0 MPa; no
+    # step landed on it, so it is said as a range up to the pressure it broke at
     assert summary["first_crack_pressure_MPa"] == pytest.approx(0.0)
     assert summary["first_crack_time_s"] <= 0.5
+    # (the path still shut then: 15.3 MPa, above every accepted step's after it broke)
+    high = summary["first_crack_pressure_bound_MPa"]
+    assert high > summary["peak_pressure_MPa"] > 0.0
+    assert first_crack_pressure_words(summary) == (
+        f"between 0.00 and {high:.2f} MPa (no step landed on it)"
+    )
 
 
 def test_a_tunnel_run_records_sigma_xx_at_its_first_crack(shared_tmp_path):

@@ -29,6 +29,7 @@ SCALARS = (
     "p_cavity",
     "initial_fluid",
     "first_break_time",
+    "first_break_pressure",  # absent from checkpoints before 2026-12-07
     "_last_ratio",
     "initial_failures",
     "rebuilds",

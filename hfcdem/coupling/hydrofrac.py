@@ -89,6 +89,7 @@ class _Attempt:
     events: int
     fluid: FluidState
     first_break_time: float | None
+    first_break_pressure: float | None
     rebuilds: int
 
 
@@ -130,6 +131,9 @@ class HydraulicFracture:
         # what caused each rebuild (start, contact, break, band, fill, retry, resume)
         self.rebuild_causes: collections.Counter[str] = collections.Counter()
         self.first_break_time: float | None = None
+        # the cavity pressure of the state in which the first facet broke: the first
+        # crack came above the last accepted step's and at most at this one
+        self.first_break_pressure: float | None = None
         # when the first facet reached its strength (the state a step landed on, else
         # the break's): each local facet's failure ratio (how near the others came),
         # the mode and midpoint of the one that reached it; not kept by a checkpoint
@@ -424,6 +428,7 @@ class HydraulicFracture:
             events=len(solid.events),
             fluid=self.facet_fluid.copy(),
             first_break_time=self.first_break_time,
+            first_break_pressure=self.first_break_pressure,
             rebuilds=self.rebuilds,
         )
 
@@ -434,6 +439,7 @@ class HydraulicFracture:
         del solid.events[saved.events :]
         self.facet_fluid.restore(saved.fluid)
         self.first_break_time = saved.first_break_time
+        self.first_break_pressure = saved.first_break_pressure
         if changed:
             self.rebuild("retry")
 
@@ -481,7 +487,8 @@ class HydraulicFracture:
                 changed_states = True
                 self._recondense("band")
                 continue
-            self._trial_pressure = self.balance.facet_pressure(self.balance.load(p))
+            load = self.balance.load(p)
+            self._trial_pressure = self.balance.facet_pressure(load)
             ratio, mode = solid.overstress(loads)
             ratio = np.where(self._eligible(), ratio, 0.0)
             worst = float(self.comm.allreduce(float(ratio.max(initial=0.0)), op=MPI.MAX))
@@ -499,7 +506,7 @@ class HydraulicFracture:
                     if self.first_break_time is None:
                         self._landed = (t1, ratio.copy(), mode.copy())
                     break
-            if self._break(ratio, mode, t1):
+            if self._break(ratio, mode, t1, float(load[0])):
                 changed_states = True
                 continue
             if self._release_debris(t1):
@@ -579,8 +586,11 @@ class HydraulicFracture:
         self.debris_cells = cells
         return True
 
-    def _break(self, ratio: np.ndarray, mode: np.ndarray, t1: float) -> bool:
-        """Break the facets the rule picks from ``ratio``; return whether any broke."""
+    def _break(self, ratio: np.ndarray, mode: np.ndarray, t1: float, cavity: float) -> bool:
+        """Break the facets the rule picks from ``ratio``; return whether any broke.
+
+        ``cavity``: the cavity pressure of the state ``ratio`` comes from.
+        """
         chosen = facets_to_break(self.solid, ratio, self.settings.max_breaks_per_iteration)
         nbreak = self.comm.allreduce(len(chosen), op=MPI.SUM)
         if not nbreak:
@@ -590,9 +600,11 @@ class HydraulicFracture:
         self.solid.break_facets(chosen, mode[chosen], t1)
         if self.first_break_time is None:
             self.first_break_time = t1
+            self.first_break_pressure = cavity
             at, how = ratio, mode
             if self._landed is not None and self._landed[0] == self.t:  # the step before
                 _, at, how = self._landed
+                self.first_break_pressure = self.p_cavity  # it reached its strength there
             self.first_break_ratio = at.copy()
             self.first_break_mode, self.first_break_point = most_overstressed(self.solid, at, how)
         self._recondense("break")
@@ -708,7 +720,7 @@ class HydraulicFracture:
                 f"({getattr(self, '_newton_failure', '')})"
             )
         self.history.clear()
-        self.first_break_time = None
+        self.first_break_time = self.first_break_pressure = None
         self.first_break_ratio = self.first_break_point = self._landed = None
         self.initial_failures = sum(self.solid.broken_counts().values()) - before
         return self.initial_failures

@@ -475,6 +475,11 @@ def _summarise(
         "peak_pressure_MPa": max(pressures) / 1e6 if pressures else None,
         "first_crack_time_s": frac.first_break_time,
         "first_crack_pressure_MPa": _first_crack_pressure(frac),
+        # the cavity pressure of the state the first crack broke in: the crack came
+        # between the two (they differ where no step landed on it, e.g. in the first)
+        "first_crack_pressure_bound_MPa": (
+            frac.first_break_pressure / 1e6 if frac.first_break_pressure is not None else None
+        ),
         "initial_failures": frac.initial_failures,
         "first_crack": first.where if first.where is not None else _first_crack(scene, frac),
         "fracture_degree": solid.fracture_degree(),
@@ -621,7 +626,12 @@ def _picture_fracture(path: Path, scene: Scene, frac: HydraulicFracture) -> None
 
 
 def _first_crack_pressure(frac: HydraulicFracture) -> float | None:
-    """Injection pressure of the state located on the first crack (MPa)."""
+    """Injection pressure of the state located on the first crack (MPa).
+
+    The highest of the steps before it: where a step landed on the crack, the
+    pressure at which the first facet reached its strength; else a lower bound
+    (the summary's ``first_crack_pressure_bound_MPa`` is the upper one).
+    """
     t = frac.first_break_time
     if t is None:
         return None
