@@ -16,6 +16,7 @@ from hfcdem.workflows.convergence import (
     run_convergence,
     study_kind,
 )
+from hfcdem.workflows.run import OutputInUse
 
 SNEDDON = "studies/sneddon_convergence.toml"
 
@@ -75,6 +76,15 @@ def test_sneddon_error_estimate_brackets_the_exact_opening(shared_tmp_path):
         argv += ["--set", item]
     assert main(argv) == 0
     assert (out / "case_2_h5" / "summary.json").stat().st_mtime == stamp
+    # other settings into the same output: refused before anything runs (once, the
+    # cases were silently run over), in one line and exit 3 on the command line
+    tables = (out / "results.csv").read_text(), (out / "convergence.csv").read_text()
+    stiffer = study.with_fixed({"rock.spring_factor": 1e5})
+    with pytest.raises(OutputInUse, match=r"case_0_h20 holds a run of .* with other settings"):
+        run_convergence(stiffer, out)
+    assert main([*argv, "--set", "rock.spring_factor=100000"]) == 3
+    assert (out / "case_2_h5" / "summary.json").stat().st_mtime == stamp
+    assert ((out / "results.csv").read_text(), (out / "convergence.csv").read_text()) == tables
 
 
 def test_an_injection_study_over_element_sizes(shared_tmp_path):

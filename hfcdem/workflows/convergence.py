@@ -84,7 +84,7 @@ from hfcdem.config.tables import SceneError
 from hfcdem.config.units import FieldError
 from hfcdem.io.files import atomic_path, prepare_output_dir, write_atomic, write_json
 from hfcdem.workflows.richardson import SPREAD, Extrapolation, extrapolate
-from hfcdem.workflows.study import case_rows, numeric, run_cases
+from hfcdem.workflows.study import case_rows, claim_cases, numeric, run_cases
 
 # swept key -> (what the error is extrapolated in, axis label, axis unit per SI unit);
 # None: names only
@@ -295,9 +295,20 @@ def run_convergence(
     comm: MPI.Comm = MPI.COMM_WORLD,
     force: bool = False,
     say: Callable[[str], None] | None = None,
+    overwrite: bool = False,
+    write: bool = True,
 ) -> ConvergenceResult:
-    """Run the cases not done (coarse to fine), estimate the errors, write the tables and plot."""
+    """Run the cases not done (coarse to fine), estimate the errors, write the tables and plot.
+
+    As :func:`~hfcdem.workflows.study.run_study`: a case directory holding a run
+    with other settings stops it before anything runs
+    (:class:`~hfcdem.workflows.run.OutputInUse`), unless ``force`` (run every
+    case again) or ``overwrite`` (run over such cases, skip those done).
+    ``write=False``: leave the tables and plot as they are (a study read back).
+    """
     say = say or (lambda msg: None)
+    if not (force or overwrite):
+        claim_cases(study, Path(output), comm)
     out = prepare_output_dir(output, comm)
     measures = [study.case_measure(k) for k in range(len(study.values))]
     order = sorted(range(len(measures)), key=lambda k: -(measures[k] or 0.0))
@@ -309,7 +320,7 @@ def run_convergence(
     answers = STATIC_ANSWERS if static else INJECTION_ANSWERS
     estimates = {key: _estimate(study, rows, key) for key, _ in answers}
     result = ConvergenceResult(tuple(rows), estimates, answers)
-    if comm.rank == 0:
+    if comm.rank == 0 and write:
         _write_outputs(out, study, result)
     comm.barrier()
     for line in format_table(study, result).splitlines():

@@ -259,7 +259,7 @@ def run_study(
     """
     say = say or (lambda msg: None)
     if not (force or overwrite):
-        _claim_cases(study, Path(output), comm)
+        claim_cases(study, Path(output), comm)
     out = prepare_output_dir(output, comm)
     run_cases(study, out, comm, groups=groups, force=force, keep_stopped=keep_stopped)
     rows = case_rows(study, out)
@@ -270,7 +270,7 @@ def run_study(
     return rows
 
 
-def _claim_cases(study: CaseSource, out: Path, comm: MPI.Comm) -> None:
+def claim_cases(study: CaseSource, out: Path, comm: MPI.Comm) -> None:
     """Refuse to run over another scene's run in a case directory (collective).
 
     Rank 0 decides and tells the others, so that every rank raises or none does.
@@ -523,6 +523,7 @@ __all__ = [
     "case_directory",
     "case_done",
     "case_rows",
+    "claim_cases",
     "load_study",
     "numeric",
     "pick_metric",
