@@ -144,6 +144,21 @@ def test_weak_rock_breaks_out_at_the_wall_on_excavation_and_the_ramp_runs(shared
     assert summary["breakdown_pressure_MPa"] == pytest.approx(3.368, abs=0.001)
     stored = json.loads((out / "summary.json").read_text())
     assert stored["initial_failures"] == summary["initial_failures"]
+    # the ramp ends on its first break, located, not broken: the rest are intact
+    assert summary["intact_joints"] + 25 == 1530
+
+
+def test_a_ramp_that_breaks_nothing_says_how_many_joints_were_left(shared_tmp_path, capsys):
+    # strengths of 0.01 MPa: the in-situ stress breaks 1,262 of the 1,530 interfaces on
+    # excavation; the 268 left sit far out in compression, dry, and hold to 25 MPa
+    weak = {"rock.tensile_strength": "0.01 MPa", "rock.cohesion": "0.01 MPa"}
+    summary = run_scene(_scene(**weak), shared_tmp_path / "weaker", say=print)
+    assert summary["breakdown_pressure_MPa"] is None
+    assert summary["initial_failures"] + summary["intact_joints"] == 1530
+    assert 0.5 < summary["fracture_degree"] < 1.0
+    said = capsys.readouterr().out
+    if MPI.COMM_WORLD.rank == 0:
+        assert f"no joint broke up to 25 MPa ({summary['intact_joints']} joints intact)" in said
 
 
 def test_pumped_seepage_scene_breaks_between_the_limits(shared_tmp_path):

@@ -213,6 +213,8 @@ def run_seepage_ramp(
             else pb / 1e6
         ),
         "initial_failures": result.initial_failures,
+        "intact_joints": _intact_joints(solid),  # at the end: what was left to break
+        "fracture_degree": solid.fracture_degree(),
         "joints_holding_pressure": result.wet_fraction,
         "wall_joint_pressure_ratio": result.wall_joint_pressure,
         "joint_aperture_m": phys.joint_aperture,
@@ -239,7 +241,16 @@ def run_seepage_ramp(
         pass
     elif pb is None:
         top = max((r[1] for r in result.history), default=ramp.initial_pressure)
-        say(f"no joint broke up to {top / 1e6:.4g} MPa")
+        if summary["intact_joints"]:
+            say(
+                f"no joint broke up to {top / 1e6:.4g} MPa "
+                f"({summary['intact_joints']} joints intact)"
+            )
+        else:
+            say(
+                f"no intact joint was left to break: the {result.initial_failures} that failed "
+                "before the ramp were all it had (the rock is weaker than its in-situ stress)"
+            )
     else:
         say(
             f"first break {pb / 1e6:.4g} MPa at {result.time:.4g} s "
@@ -247,6 +258,12 @@ def run_seepage_ramp(
             f"hold pressure, wall joints at {result.wall_joint_pressure:.3f} of the cavity's"
         )
     return summary
+
+
+def _intact_joints(solid: CDEMSolid) -> int:
+    """Return how many breakable interfaces are intact, over every rank."""
+    intact = solid.owned & ~solid.is_crack & (solid.state == FacetState.INTACT)
+    return int(solid.comm.allreduce(int(np.count_nonzero(intact)), op=MPI.SUM))
 
 
 def _write_joints(
