@@ -42,6 +42,7 @@ from hfcdem.coupling.groups import joined_cracks
 from hfcdem.flow.apertures import JointAperture, network_apertures
 from hfcdem.flow.network import gather_rows
 from hfcdem.flow.seepage import JointSeepage, joint_network, network_positions
+from hfcdem.io.progress import Cadence
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.equilibrium import critical_factor
 from hfcdem.solid.forms import Loads, combine
@@ -269,6 +270,7 @@ def ramp_breakdown(
     drive = _Drive(solid, tuple(cavity), fluid, aperture, ramp)
     t, pw, pj = 0.0, ramp.initial_pressure, drive.seep.pressure
     history: list[tuple[float, float, float, float]] = []
+    cadence = Cadence(ramp.steps, solid.comm)
     try:
         for n in range(1, ramp.steps + 1):
             pw_new = drive.advance(n, pw)
@@ -279,7 +281,7 @@ def ramp_breakdown(
             crit = critical_factor(solid, base, unit, 0.0, 1.0, 8)
             s = solid.comm.allreduce(float(crit.min()) if crit.size else math.inf, op=MPI.MIN)
             history.append((t + ramp.dt, pw_new, float(drive.seep.content.sum()), s))
-            if progress is not None and (n % max(1, ramp.steps // 10) == 0 or math.isfinite(s)):
+            if progress is not None and cadence.due(n, math.isfinite(s)):
                 progress(
                     f"  t {t + ramp.dt:.4g} s, cavity {pw_new / 1e6:.4g} MPa, "
                     f"joints holding pressure {np.mean(pj_new > 0) if pj_new.size else 0.0:.1%}"

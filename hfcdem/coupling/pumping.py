@@ -84,6 +84,7 @@ from hfcdem.flow.seepage import (
     network_positions,
     network_values,
 )
+from hfcdem.io.progress import Cadence
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.equilibrium import critical_factor
 from hfcdem.solid.forms import Loads
@@ -786,7 +787,7 @@ class _PumpedCavity:
         peak, peak_time, stopped, limit = self.p, 0.0, None, False
         # the pressure curve the breakdown is read from: each step's highest, then its end
         curve_t, curve_p = [0.0], [self.p]
-        every = max(1, pumping.steps // 10)
+        cadence = Cadence(pumping.steps, solid.comm)
         if frames is not None:
             frames(t, *self.fields())
         stepper = StepController(
@@ -857,7 +858,7 @@ class _PumpedCavity:
                 for news in self.debris_news:
                     progress(news)
             self.debris_news.clear()
-            if progress is not None and (n % every == 0 or broken):
+            if progress is not None and cadence.due(n, bool(broken)):
                 progress(
                     f"  t {t:.4g} s, cavity {self.p / 1e6:.4g} MPa, {counts['tensile']} tensile "
                     f"{counts['shear']} shear, joints holding pressure {wet:.1%}, "
