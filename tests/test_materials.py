@@ -21,9 +21,9 @@ def test_material_validation_names_the_field(kwargs, message):
 
 
 def test_in_situ_validation_and_rotation():
-    with pytest.raises(ValueError, match="sh_max"):
+    with pytest.raises(ValueError, match=r"sh_max \(1 MPa\) must be >= sh_min \(2 MPa\)"):
         InSituStress(1e6, 2e6)
-    with pytest.raises(ValueError, match="sv must be a stress in Pa"):
+    with pytest.raises(ValueError, match=r"sv must be a stress below 10 GPa, got 4\.3e\+04 GPa"):
         InSituStress(38e6, 34e6, sv=43e12)
     rotated = InSituStress(6e6, 1e6, azimuth_sh=90.0).tensor(2)
     assert np.allclose(rotated, -np.diag([1e6, 6e6]))

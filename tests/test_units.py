@@ -4,7 +4,14 @@ import math
 
 import pytest
 
-from hfcdem.config.units import FieldError, UnitError, format_quantity, join_path, parse_quantity
+from hfcdem.config.units import (
+    FieldError,
+    UnitError,
+    format_quantity,
+    join_path,
+    parse_quantity,
+    show_stress,
+)
 
 
 @pytest.mark.parametrize(
@@ -73,3 +80,23 @@ def test_format_quantity_round_trips():
     assert parse_quantity(format_quantity(73e6, "MPa"), "stress") == pytest.approx(73e6)
     with pytest.raises(ValueError, match="unknown unit"):
         format_quantity(1.0, "parsec")
+
+
+def test_stresses_are_echoed_as_a_scene_writes_them():
+    assert show_stress(-5e6) == "-5 MPa"
+    assert show_stress(8.402e9) == "8.402 GPa"
+    assert show_stress(2500.0) == "2.5 kPa"
+    assert show_stress(12.0) == "12 Pa" and show_stress(0.0) == "0 Pa"
+    assert show_stress(float("nan")) == "nan Pa"
+
+
+def test_a_scene_s_bad_stress_is_echoed_in_a_readable_unit():
+    from hfcdem.config.scene import load_scene
+    from hfcdem.config.tables import SceneError
+
+    scene = "meshes/scenes/borehole_seepage.toml"
+    negative = r"rock\.tensile_strength: must not be negative, got -5 MPa"
+    with pytest.raises(SceneError, match=negative):
+        load_scene(scene, "coarse", overrides={"rock.tensile_strength": "-5 MPa"})
+    with pytest.raises(SceneError, match=r"injection\.pressure_step: .* got -100 kPa"):
+        load_scene(scene, "coarse", overrides={"injection.pressure_step": "-100 kPa"})

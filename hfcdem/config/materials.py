@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hfcdem.config.fingerprint import added_field, fingerprinted
+from hfcdem.config.units import show_stress
 
 
 def _check_positive(name: str, value: float, unit: str, upper: float = math.inf) -> None:
@@ -111,10 +112,13 @@ class InSituStress:
         for key in ("sh_max", "sh_min", "sv"):
             if abs(getattr(self, key)) > 1e10:
                 raise ValueError(
-                    f"{key} must be a stress in Pa below 10 GPa, got {getattr(self, key)!r}"
+                    f"{key} must be a stress below 10 GPa, got {show_stress(getattr(self, key))}"
                 )
         if self.sh_max < self.sh_min:
-            raise ValueError(f"sh_max ({self.sh_max} Pa) must be >= sh_min ({self.sh_min} Pa)")
+            raise ValueError(
+                f"sh_max ({show_stress(self.sh_max)}) must be >= "
+                f"sh_min ({show_stress(self.sh_min)})"
+            )
 
     def tensor(self, gdim: int) -> np.ndarray:
         """Return the in-situ stress as a tension-positive ``gdim x gdim`` tensor."""
@@ -187,7 +191,7 @@ class InterfaceModel:
         for key in ("tensile_strength", "cohesion"):
             value = getattr(self, key)
             if math.isnan(value) or value < 0.0 or (math.isfinite(value) and value > 1e10):
-                raise ValueError(f"{key} must be in [0, 1e10] Pa (or inf), got {value!r}")
+                raise ValueError(f"{key} must be in [0, 10 GPa] (or inf), got {show_stress(value)}")
         if not (math.isfinite(self.friction_angle) and 0.0 <= self.friction_angle < 90.0):
             raise ValueError(f"friction_angle must be in [0, 90) deg, got {self.friction_angle!r}")
         if self.weibull_modulus is not None and not (
@@ -220,7 +224,7 @@ class InterfaceModel:
 
 def _check_range(name: str, value: float, low: float, high: float, unit: str) -> None:
     if not (math.isfinite(value) and low <= value <= high):
-        raise ValueError(f"{name} must be in [{low:g}, {high:g}] {unit}, got {value!r}")
+        raise ValueError(f"{name} must be in [{low:g}, {high:g}] {unit}, got {value:g} {unit}")
 
 
 @fingerprinted

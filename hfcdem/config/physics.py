@@ -115,7 +115,7 @@ from hfcdem.config.materials import (
     JointAperture,
 )
 from hfcdem.config.tables import SceneError, TomlTable
-from hfcdem.config.units import parse_quantity
+from hfcdem.config.units import parse_quantity, show_stress
 
 
 def field_default(cls: type, name: str) -> Any:
@@ -180,7 +180,8 @@ class StaticLoad:
     def __post_init__(self) -> None:
         if not (math.isfinite(self.crack_pressure) and abs(self.crack_pressure) <= 1e9):
             raise ValueError(
-                f"load.crack_pressure: expected -1 GPa to 1 GPa, got {self.crack_pressure!r} Pa"
+                "load.crack_pressure: expected -1 GPa to 1 GPa, "
+                f"got {show_stress(self.crack_pressure)}"
             )
 
 
@@ -273,12 +274,14 @@ def _read_rock(r: _Reader) -> tuple[ElasticMaterial, dict[str, Any], JointApertu
     rock = r.section("rock")
     e = rock.quantity("youngs_modulus", "stress")
     nu = rock.number("poisson_ratio")
-    _check(1e6 <= e <= 1e13, "rock.youngs_modulus", f"expected 1 MPa to 10 TPa, got {e:g} Pa")
+    _check(
+        1e6 <= e <= 1e13, "rock.youngs_modulus", f"expected 1 MPa to 10 TPa, got {show_stress(e)}"
+    )
     _check(-1.0 < nu < 0.5, "rock.poisson_ratio", f"expected a value in (-1, 0.5), got {nu!r}")
     t0 = rock.quantity("tensile_strength", "stress")
     c0 = rock.quantity("cohesion", "stress")
     for key, value in (("tensile_strength", t0), ("cohesion", c0)):
-        _check(value >= 0.0, f"rock.{key}", f"a strength must not be negative, got {value:g} Pa")
+        _check(value >= 0.0, f"rock.{key}", f"must not be negative, got {show_stress(value)}")
     phi = math.degrees(
         r.get(
             rock,
@@ -407,7 +410,7 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
         _check(
             abs(pressure) <= _LARGEST_STRESS,
             "load.crack_pressure",
-            f"expected -1 GPa to 1 GPa, got {pressure:g} Pa",
+            f"expected -1 GPa to 1 GPa, got {show_stress(pressure)}",
         )
         ld.finish()
         load: StaticLoad | None = StaticLoad(pressure)
@@ -448,7 +451,8 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
         _check(
             wet is None or 0.0 <= wet <= _LARGEST_STRESS,
             "injection.joint_pressure",
-            f"expected a pore pressure in [0, 1 GPa], got {wet!r} Pa",
+            "expected a pore pressure in [0, 1 GPa], "
+            f"got {show_stress(wet if wet is not None else math.nan)}",
         )
         _check(
             wet is None or joints == "seepage",
@@ -500,13 +504,17 @@ def _read_ramp(inj: TomlTable, p0: float) -> tuple[Injection, float, float | Non
         duration = inj.quantity("duration", "time")
     else:
         top = inj.quantity("max_pressure", "stress")
-        _check(top > p0, "injection.max_pressure", f"must exceed initial_pressure {p0:g} Pa")
+        _check(
+            top > p0,
+            "injection.max_pressure",
+            f"must exceed initial_pressure {show_stress(p0)}, got {show_stress(top)}",
+        )
         duration = (top - p0) / rate
     step = inj.quantity("pressure_step", "stress") if inj.has("pressure_step") else None
     _check(
         step is None or step > 0.0,
         "injection.pressure_step",
-        f"must be a positive pressure, got {step!r} Pa",
+        f"must be a positive pressure, got {show_stress(step if step is not None else math.nan)}",
     )
     return (
         Injection.pressure_schedule([(0.0, p0), (duration, p0 + rate * duration)]),

@@ -175,6 +175,16 @@ def format_quantity(value: float, unit: str, digits: int = 4) -> str:
     return f"{value / UNITS[dim][unit]:.{digits}g} {unit}"
 
 
+def show_stress(value: float) -> str:
+    """Say a stress in Pa the way a scene would write it: ``show_stress(-5e6) == "-5 MPa"``."""
+    if not math.isfinite(value):
+        return f"{value!r} Pa"
+    for unit, factor in (("GPa", 1e9), ("MPa", 1e6), ("kPa", 1e3)):
+        if abs(value) >= factor:
+            return f"{value / factor:.4g} {unit}"
+    return f"{value:.4g} Pa"
+
+
 __all__ = [
     "EXAMPLES",
     "UNITS",
@@ -183,4 +193,5 @@ __all__ = [
     "format_quantity",
     "join_path",
     "parse_quantity",
+    "show_stress",
 ]
