@@ -7,8 +7,10 @@ first crack at the default mesh, one rank: 4.2 GB resident after the run,
 0.23 GB after :func:`release_memory`).  And petsc4py keeps a parallel
 object that Python has let go as garbage of its communicator until
 :func:`free_petsc_garbage` is called there (``run_scene`` does, on its
-mesh's communicator).  Not found yet: on two ranks 1.7-2.0 GB a rank of a
-default-mesh run stay in use after both (benchmarks/README.md, 2026-12-07).
+mesh's communicator).  That call also frees what a destroyed object's Python
+context held (the low-rank solver's Python PC holds the MUMPS factor's KSP),
+which PETSc's own cleanup loses: until it did, about the factor's size stayed
+in use a rank after every run on two ranks (benchmarks/README.md, 2026-12-07).
 
 ``getrusage``'s peak is the process's since it started;
 :func:`reset_peak_memory` restarts Linux's high-water mark so that
@@ -48,9 +50,31 @@ def free_petsc_garbage(comm: MPI.Comm) -> None:
     of its communicator until this is called on every rank of it.  A run's
     solver lives on its mesh's communicator (a duplicate of the run's), so
     nothing else frees it.
+
+    Destroying a garbage object can release Python objects holding others (a
+    Python PC's context: the low-rank solver's holds the MUMPS factor's KSP and
+    its matrix).  Released during ``PETSc.garbage_cleanup`` they would be lost:
+    PETSc (3.22) files them in a fresh garbage table of the communicator, which
+    the cleanup replaces by its own when it ends, so nothing destroys them.  The
+    live wrappers are therefore held through each cleanup and released after it,
+    and the cleanup repeats while that freed any (the ranks agree on it).
     """
     gc.collect()
-    PETSc.garbage_cleanup(comm)
+    held = _petsc_wrappers()
+    while True:
+        PETSc.garbage_cleanup(comm)
+        count = len(held)
+        held = []  # what only a destroyed object held goes to the garbage now
+        gc.collect()
+        held = _petsc_wrappers()
+        if not comm.allreduce(len(held) < count, op=MPI.LOR):
+            break
+
+
+def _petsc_wrappers() -> list[PETSc.Object]:
+    """Return the petsc4py objects Python holds (tracked by its collector)."""
+    # type(), not isinstance(): a dead weak proxy among the objects would raise
+    return [o for o in gc.get_objects() if issubclass(type(o), PETSc.Object)]
 
 
 def release_memory() -> bool:
