@@ -29,8 +29,9 @@ LAYERS = [
     "__main__",
 ]
 # Atomic writers and the off-screen plotting switch serve every layer that
-# writes a file; they import nothing of the solid, flow, coupling or workflows.
-SHARED = {"hfcdem.io.files", "hfcdem.io.plots"}
+# writes a file, the progress cadence every loop that says where it is; they
+# import nothing of the solid, flow, coupling or workflows.
+SHARED = {"hfcdem.io.files", "hfcdem.io.plots", "hfcdem.io.progress"}
 
 
 def _module_name(path: Path) -> str:
