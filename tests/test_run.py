@@ -599,3 +599,23 @@ def test_a_strength_length_below_the_cells_an_unused_fidelity_and_tension_are_sa
     seepage = "meshes/scenes/borehole_seepage.toml"
     assert "solver.fidelity is not used" in said(seepage, **{"solver.fidelity": "viscous"})
     assert said(seepage) == ""
+
+
+def test_the_first_step_after_initial_failures_is_shortened_onto_the_first_crack(
+    shared_tmp_path,
+):
+    """The lab specimen at 45 deg: the in-situ stress alone breaks 7 interfaces at the root.
+
+    The step controller took the settled state's failure ratio as 1 (a step that broke),
+    so the first step could not be shortened: the first crack came somewhere in 0-2.29 MPa
+    at 0.25 s.  With the settled state's own ratio it is located in 0-0.42 MPa, 0.043 s.
+    """
+    scene = load_scene(
+        "meshes/scenes/lab_specimen_45deg.toml",
+        "coarse",
+        overrides={"injection.until": "first crack"},
+    )
+    summary = run_scene(scene, shared_tmp_path / "lab45_first")
+    assert summary["initial_failures"] == 7
+    assert summary["first_crack_time_s"] < 0.05
+    assert summary["first_crack_pressure_bound_MPa"] < 0.5

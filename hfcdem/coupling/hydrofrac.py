@@ -142,6 +142,7 @@ class HydraulicFracture:
         self.first_break_mode = 0
         self._landed: tuple[float, np.ndarray, np.ndarray] | None = None
         self.initial_failures = 0
+        self._worst = math.inf  # worst failure ratio of the last state the step loop checked
         self.wall_start = time.perf_counter()
         for name in (*s.cavity, *s.supports):
             solid.tmesh.facet_tag(name)  # clear error for unknown groups
@@ -492,6 +493,7 @@ class HydraulicFracture:
             ratio, mode = solid.overstress(loads)
             ratio = np.where(self._eligible(), ratio, 0.0)
             worst = float(self.comm.allreduce(float(ratio.max(initial=0.0)), op=MPI.MAX))
+            self._worst = worst  # the last state's: the accepted one's once the loop ends
             if iteration == 0 or (self.first_break_time is None and not changed_states):
                 # event location: a step that overshoots the next break is shortened; before
                 # the first crack also when contacts it switched made the ratio jump past
@@ -720,6 +722,10 @@ class HydraulicFracture:
                 f"({getattr(self, '_newton_failure', '')})"
             )
         self.history.clear()
+        # the settled state's worst failure ratio, not 1 for a step that broke: so the
+        # first step can be shortened onto the first crack (lab at 45 deg, coarse: once it
+        # broke in the first step, somewhere between 0 and 2.29 MPa)
+        self._last_ratio = self._worst
         self.first_break_time = self.first_break_pressure = None
         self.first_break_ratio = self.first_break_point = self._landed = None
         self.initial_failures = sum(self.solid.broken_counts().values()) - before
