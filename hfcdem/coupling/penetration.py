@@ -267,6 +267,8 @@ def ramp_breakdown(
             settled_failures(solid, stop),
             stopped=f"the excavated rock fails before the ramp: {stop}",
         )
+    if progress is not None and initial_failures:  # said before the ramp's lines
+        progress(f"initial state: {initial_failures} interfaces fail before the ramp")
     drive = _Drive(solid, tuple(cavity), fluid, aperture, ramp)
     t, pw, pj = 0.0, ramp.initial_pressure, drive.seep.pressure
     history: list[tuple[float, float, float, float]] = []

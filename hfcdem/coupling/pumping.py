@@ -264,6 +264,8 @@ def pump_with_seepage(
         why = f"the excavated rock is past the validity limit before pumping: {stop}"
         failures = settled_failures(solid, stop)
         return _stopped_before_pumping(pumping, failures, why, validity_limit=True)
+    if progress is not None and initial_failures:  # said before the pumping's lines
+        progress(f"initial state: {initial_failures} interfaces fail before pumping")
     try:
         run = _PumpedCavity(
             solid, tuple(cavity), fluid, aperture, pumping, tuple(supports), contact_hysteresis

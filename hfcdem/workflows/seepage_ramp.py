@@ -187,8 +187,6 @@ def run_seepage_ramp(
     result = ramp_breakdown(solid, cavity, phys.fluid, phys.joints, ramp, progress=say)
     if result.stopped:
         say(f"stopped: {result.stopped}")
-    elif result.initial_failures:
-        say(f"initial state: {result.initial_failures} interfaces fail before the ramp")
     rows = [list(row) for row in result.history]
     write_csv(
         out / "history.csv",
@@ -357,8 +355,6 @@ def _run_pumped(
     )
     if result.stopped:
         say(f"stopped: {result.stopped}")
-    if result.initial_failures:
-        say(f"initial state: {result.initial_failures} interfaces fail before pumping")
     _write_joints(out / "joints.vtu", solid, result.joint_pressure, result.saturation)
     first, pb = result.first_pressure, result.breakdown
     location = result.first_location
