@@ -207,7 +207,8 @@ def first_crack_pressure_words(summary: dict[str, Any]) -> str:
     """Say the first crack's pressure, as a range where no step landed on it."""
     low = summary["first_crack_pressure_MPa"]
     high = summary.get("first_crack_pressure_bound_MPa")
-    if high is None or f"{high:.2f}" == f"{low:.2f}":
+    # (a pressure that fell before the crack can leave the highest before it above)
+    if high is None or high <= low or f"{high:.2f}" == f"{low:.2f}":
         return f"{low:.2f} MPa"
     return f"between {low:.2f} and {high:.2f} MPa (no step landed on it)"
 

@@ -2,7 +2,7 @@
 
 import pytest
 
-from hfcdem.cli import breakdown_words, main, split_petsc_options
+from hfcdem.cli import breakdown_words, first_crack_pressure_words, main, split_petsc_options
 
 
 def test_info_prints_the_stack(capsys):
@@ -113,3 +113,15 @@ def test_ctrl_c_ends_with_one_line_and_exit_130(monkeypatch, capsys):
     if MPI.COMM_WORLD.rank == 0:
         err = capsys.readouterr().err
         assert err.startswith("interrupted: ") and "Traceback" not in err
+
+
+def test_a_first_crack_no_step_landed_on_is_said_as_a_range():
+    def said(low, high):
+        summary = {"first_crack_pressure_MPa": low, "first_crack_pressure_bound_MPa": high}
+        return first_crack_pressure_words(summary)
+
+    assert said(0.0, 2.29) == "between 0.00 and 2.29 MPa (no step landed on it)"
+    assert said(61.644, 61.644) == "61.64 MPa"  # landed: one value
+    assert said(61.644, 61.6441) == "61.64 MPa"
+    assert said(62.1, 61.9) == "62.10 MPa"  # the pressure fell before the crack
+    assert said(8.8, None) == "8.80 MPa"  # a summary from before the bound
