@@ -86,7 +86,7 @@ def test_bad_seepage_scenes_name_the_field():
                 },
             )
         )
-    with pytest.raises(SceneError, match="must rise"):
+    with pytest.raises(SceneError, match="must rise, got 5 MPa -> 1 MPa"):
         seepage_loading(
             _scene(
                 **schedule,

@@ -38,6 +38,7 @@ from mpi4py import MPI
 from hfcdem.config.physics import Physics
 from hfcdem.config.scene import Scene
 from hfcdem.config.tables import SceneError
+from hfcdem.config.units import show_stress
 from hfcdem.coupling.breakdown import FIRST_CRACK_END, peak_is_lower_bound
 from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakdown
 from hfcdem.coupling.pumping import COST_COLUMNS, PumpingResult, pump_with_seepage
@@ -129,7 +130,8 @@ def seepage_loading(scene: Scene) -> PressureRamp | CavityPumping:
     p0, (t1, p1) = points[0][1], points[1]
     if not p1 > p0:
         raise SceneError(
-            "injection.pressure_schedule", f"the ramp must rise, got {p0:g} -> {p1:g} Pa"
+            "injection.pressure_schedule",
+            f"the ramp must rise, got {show_stress(p0)} -> {show_stress(p1)}",
         )
     if phys.duration > t1 * (1 + 1e-12):
         raise SceneError(
