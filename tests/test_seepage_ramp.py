@@ -98,6 +98,12 @@ def test_bad_seepage_scenes_name_the_field():
         )
     with pytest.raises(SceneError, match=r"rock\.joint_aperture"):
         _scene(**{"rock.joint_aperture": "2 mm"})
+    # a ramp's own keys left beside a schedule: said as misplaced, not unknown
+    ramp_left = {"injection.pressure_rate": None, "injection.max_pressure": None}
+    ramp_left |= {"injection.pressure_schedule": [["0 s", "0 MPa"], ["25 s", "25 MPa"]]}
+    ramp_left |= {"injection.duration": "25 s"}
+    with pytest.raises(SceneError, match=r"injection\.pressure_step: .* with pressure_rate"):
+        _scene(**ramp_left)
     with pytest.raises(SceneError, match="duration or max_pressure"):
         _scene(**{"injection.duration": "10 s"})
     with pytest.raises(SceneError, match=r"injection\.pressure_rate"):

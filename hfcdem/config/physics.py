@@ -426,6 +426,12 @@ def _read_pump(r: _Reader) -> dict[str, Any]:
         if injection is None:  # pressure_rate: a linear ramp from p0
             injection, duration, pressure_step = _read_ramp(inj, p0)
         else:
+            for key in ("max_pressure", "pressure_step"):  # not "unknown key": misplaced
+                _check(
+                    not inj.has(key),
+                    f"injection.{key}",
+                    "belongs to a pressure ramp: give it with pressure_rate",
+                )
             duration = inj.quantity("duration", "time")
         _check(duration > 0.0, "injection.duration", f"must be positive, got {duration:g} s")
         extra = r.get(  # a volume with its unit; a bare number is m3 (older scenes)
