@@ -13,8 +13,6 @@ use after a case should be that of the one before.
 from __future__ import annotations
 
 import argparse
-import ctypes
-import ctypes.util
 import re
 import shutil
 import tempfile
@@ -25,28 +23,15 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from hfcdem.config.scene import load_scene
-from hfcdem.workflows.memory import release_memory
+from hfcdem.workflows.memory import heap_in_use_mb, release_memory
 from hfcdem.workflows.run import run_scene
-
-
-class _MallInfo2(ctypes.Structure):
-    _fields_ = [
-        (name, ctypes.c_size_t)
-        for name in ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks",
-                     "uordblks", "fordblks", "keepcost")
-    ]  # fmt: skip
-
-
-_libc = ctypes.CDLL(ctypes.util.find_library("c"))
-_libc.mallinfo2.restype = _MallInfo2
 
 
 def _gb() -> tuple[float, float]:
     """Resident memory and heap in use (small blocks and mmapped ones), GB."""
     rss = next(float(line.split()[1]) for line in Path("/proc/self/status").read_text().splitlines()
                if line.startswith("VmRSS:")) / 2**20  # fmt: skip
-    info = _libc.mallinfo2()
-    return rss, (info.uordblks + info.hblkhd) / 2**30
+    return rss, (heap_in_use_mb() or 0.0) / 2**10
 
 
 def _undestroyed(comm: MPI.Comm, scratch: Path) -> str:

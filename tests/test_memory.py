@@ -12,6 +12,7 @@ from petsc4py import PETSc
 
 from hfcdem.workflows.memory import (
     free_petsc_garbage,
+    heap_in_use_mb,
     peak_memory_mb,
     release_memory,
     reset_peak_memory,
@@ -71,18 +72,9 @@ def test_release_hands_back_a_fragmented_heap() -> None:
 
 
 def _heap_in_use_mb() -> float:
-    import ctypes
-    import ctypes.util
-
-    class MallInfo2(ctypes.Structure):
-        _fields_ = [(name, ctypes.c_size_t) for name in (
-            "arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks",
-            "uordblks", "fordblks", "keepcost")]  # fmt: skip
-
-    libc = ctypes.CDLL(ctypes.util.find_library("c"))
-    libc.mallinfo2.restype = MallInfo2
-    info = libc.mallinfo2()
-    return (info.uordblks + info.hblkhd) / 2**20
+    used = heap_in_use_mb()
+    assert used is not None, "glibc's mallinfo2"
+    return used
 
 
 class _Holder:

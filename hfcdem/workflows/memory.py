@@ -80,6 +80,27 @@ def _petsc_wrappers() -> list[PETSc.Object]:
     return [o for o in gc.get_objects() if issubclass(type(o), PETSc.Object)]
 
 
+class _MallInfo2(ctypes.Structure):
+    _fields_ = [
+        (name, ctypes.c_size_t)
+        for name in ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks",
+                     "uordblks", "fordblks", "keepcost")
+    ]  # fmt: skip
+
+
+def heap_in_use_mb() -> float | None:
+    """Heap in use by this process (MB): malloc's small blocks and mmapped ones (glibc).
+
+    None where malloc has no ``mallinfo2``.
+    """
+    libc = _libc()
+    if libc is None or not hasattr(libc, "mallinfo2"):
+        return None
+    libc.mallinfo2.restype = _MallInfo2
+    info = libc.mallinfo2()
+    return float(info.uordblks + info.hblkhd) / 2**20
+
+
 def release_memory() -> bool:
     """Collect garbage and return the heap's free pages to the system (glibc).
 
