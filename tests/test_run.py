@@ -1,6 +1,7 @@
 """`hfcdem run`: a scene file through mesh, solid, fluid and outputs."""
 
 import csv
+import gc
 import json
 
 import numpy as np
@@ -13,6 +14,7 @@ from hfcdem.config.scene import load_scene, parse_scene
 from hfcdem.config.tables import SceneError
 from hfcdem.io.series import read_pvd
 from hfcdem.solid.states import OPEN
+from hfcdem.solvers import SolverError
 from hfcdem.workflows.observers import StepObserver
 from hfcdem.workflows.run import OutputInUse, pressurised_groups, run_scene, supporting_walls
 
@@ -216,6 +218,29 @@ def test_a_forced_run_that_stops_leaves_no_other_runs_summary(shared_tmp_path):
     assert not case_done(out, scene_fingerprint(coarse))
 
 
+class _FailOnEveryRank(StepObserver):
+    def step(self, frac, rec):
+        raise SolverError("a solve failed on every rank", -11)
+
+
+def _live_ksps():
+    from petsc4py import PETSc
+
+    return sum(1 for o in gc.get_objects() if issubclass(type(o), PETSc.KSP) and o.handle)
+
+
+def test_a_run_that_fails_on_every_rank_frees_its_solver_at_once(shared_tmp_path):
+    # the traceback keeps the run's frames, and the solid in them: before, its
+    # factorisation stayed alive (on two ranks, in garbage) until the error was dropped
+    gc.collect()
+    before = _live_ksps()
+    with pytest.raises(SolverError) as failed:
+        run_scene(load_scene(KGD, "coarse"), shared_tmp_path / "fails",
+                  observers=[_FailOnEveryRank()])  # fmt: skip
+    assert failed.traceback  # still held here
+    assert MPI.COMM_WORLD.allreduce(_live_ksps() - before, op=MPI.MAX) == 0
+
+
 def test_blocks_loose_in_the_cavity_end_the_run_at_its_validity_limit(
     shared_tmp_path, monkeypatch, capsys
 ):
@@ -320,7 +345,8 @@ def test_a_forced_run_refused_after_meshing_leaves_the_earlier_run_whole(shared_
         "meshes/scenes/borehole_seepage.toml", "coarse",
         overrides={"solver.break_landing": "tolerance"},
     )  # fmt: skip
-    with pytest.raises(SceneError, match=r"solver\.break_landing"):
+    # named with its file, as a check made while loading it would be
+    with pytest.raises(SceneError, match=r"^borehole_seepage\.toml: solver\.break_landing"):
         run_scene(ramp, out, force=True)
     plate = parse_scene(
         {**_toml("meshes/scenes/crack_plate.toml"), **_toml(KGD, ("rock", "stress", "fluid",

@@ -586,6 +586,8 @@ class CDEMSolid:
         version = (self.band.version, self.held_version)
         if self._reduced is None or self._reduced_version != version:
             glued = glued_facet_set(self.interface_facets, ~self.band.free)
+            if self._reduced is not None:
+                self._reduced.destroy()
             self._reduced = ReducedSystem(
                 self.V, self._bcs, glued, self.petsc_options, prefix=self.prefix
             )
@@ -868,11 +870,35 @@ class CDEMSolid:
         """
         return ramp(self, base, unit, max_factor, stop_after_first, samples, max_iterations)
 
+    def destroy(self) -> None:
+        """Free the solid's factorisations and PETSc matrices now (collective).
+
+        Python alone would leave them, on more than one rank, in their
+        communicator's garbage until it is cleaned, and for as long as anything
+        (a traceback) still refers to the solid.  Call it when the solid is done with.
+        """
+        self.operator.destroy()
+        if self._filter is not None:
+            self._filter.destroy()
+        if self._reduced is not None:
+            self._reduced.destroy()
+            self._reduced, self._reduced_version = None, None
+
     # ---------------------------------------------------------------- results
+
+    @property
+    def breakable(self) -> np.ndarray:
+        """Owned interfaces that can break: every one but the pre-existing cracks."""
+        return self.owned & ~self.is_crack
+
+    def intact_count(self) -> int:
+        """Global number of breakable interfaces still intact."""
+        intact = self.breakable & (self.state == FacetState.INTACT)
+        return int(self.comm.allreduce(int(np.count_nonzero(intact)), op=MPI.SUM))
 
     def fracture_degree(self) -> float:
         """Broken interface area / breakable interface area (pre-existing cracks excluded)."""
-        breakable = self.owned & ~self.is_crack
+        breakable = self.breakable
         broken = breakable & (self.state != FacetState.INTACT)
         num = self.comm.allreduce(float(self.areas[broken].sum()), op=MPI.SUM)
         den = self.comm.allreduce(float(self.areas[breakable].sum()), op=MPI.SUM)
@@ -880,7 +906,7 @@ class CDEMSolid:
 
     def broken_counts(self) -> dict[str, int]:
         """Global numbers of tensile and shear failures (pre-existing cracks excluded)."""
-        mask = self.owned & ~self.is_crack
+        mask = self.breakable
         tensile = int(np.count_nonzero(mask & (self.state == FacetState.TENSILE)))
         shear = int(np.count_nonzero(mask & (self.state == FacetState.SHEAR)))
         return {

@@ -250,6 +250,10 @@ class ReducedSystem:
         """Global number of reduced unknowns."""
         return self.clusters.num_global * self.clusters.bs
 
+    def destroy(self) -> None:
+        """Free the prolongation (collective)."""
+        self.clusters.prolongation.destroy()
+
     def reduce(self, A: PETSc.Mat, diagonal: float = 1.0) -> PETSc.Mat:
         """Return ``P^T A P`` with the held rows and columns set to ``diagonal`` I.
 

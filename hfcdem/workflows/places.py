@@ -198,7 +198,7 @@ def stress_along_tunnels(
     i, j = COMPONENTS[component]
     mesh, comm = solid.mesh, solid.comm
     tdim = mesh.topology.dim
-    rock = solid.owned & ~solid.is_crack
+    rock = solid.breakable
     cells = np.unique(solid.cells[rock].ravel())
     cells = cells[(cells >= 0) & (cells < mesh.topology.index_map(tdim).size_local)]
     sigma = interpolate_expression(solid.total_stress()[i, j] / 1e6, mesh, ("DG", 0))

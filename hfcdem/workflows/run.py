@@ -24,7 +24,8 @@ from __future__ import annotations
 import hashlib
 import json
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -34,6 +35,7 @@ from mpi4py import MPI
 
 from hfcdem.config.geometry import Scene
 from hfcdem.config.tables import SceneError
+from hfcdem.config.units import FieldError
 from hfcdem.coupling.breakdown import FIRST_CRACK_END, breakdown_note, detect_breakdown
 from hfcdem.coupling.hydrofrac import (
     FlowSettings,
@@ -48,7 +50,7 @@ from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import FieldSeries
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.interfaces import FacetState
-from hfcdem.solvers import ValidityLimit
+from hfcdem.solvers import SolverError, ValidityLimit
 from hfcdem.workflows.memory import free_petsc_garbage, peak_memory_mb, reset_peak_memory
 from hfcdem.workflows.observers import (
     CheckpointWriter,
@@ -304,7 +306,8 @@ def run_scene(
     if scene.physics.load is None and scene.physics.wall_joints == "seepage":
         from hfcdem.workflows.seepage_ramp import seepage_loading
 
-        seepage_loading(scene)  # its checks, before an earlier run's files are touched
+        with in_scene_file(scene):
+            seepage_loading(scene)  # its checks, before an earlier run's files are touched
     say = say or (lambda msg: None)
     wall0 = time.perf_counter()
     own_peak = comm.allreduce(reset_peak_memory(), op=MPI.LAND)  # the peak is this run's
@@ -316,7 +319,8 @@ def run_scene(
         say("defaults: " + ", ".join(phys.defaulted))
     sm = create_scene_mesh(scene, comm)
     tmesh = sm.tmesh
-    _check_loaded_walls(scene, tmesh.facet_names)
+    with in_scene_file(scene):
+        _check_loaded_walls(scene, tmesh.facet_names)
     # an earlier run's files are touched only now, when the scene has meshed and
     # passed every check; a resume writes its record once the checkpoint is taken
     if not resume:
@@ -351,23 +355,50 @@ def run_scene(
             "resolved_scene": _resolved_scene(scene),
         }
 
-    if phys.load is not None:
-        from hfcdem.workflows.static import run_static
+    collective = False  # whether every rank is here together, so the solid can be freed
+    try:
+        if phys.load is not None:
+            from hfcdem.workflows.static import run_static
 
-        summary = run_static(scene, solid, out, say, record)
-    elif phys.wall_joints == "seepage":
-        from hfcdem.workflows.seepage_ramp import run_seepage_ramp
+            with in_scene_file(scene):
+                summary = run_static(scene, solid, out, say, record)
+        elif phys.wall_joints == "seepage":
+            from hfcdem.workflows.seepage_ramp import run_seepage_ramp
 
-        cavity = pressurised_groups(tmesh.facet_names, phys.wellbore)
-        supports = supporting_walls(tmesh.facet_names, cavity, phys.wellbore)
-        summary = run_seepage_ramp(scene, solid, cavity, out, say, record, supports)
-    else:
-        summary = _run_coupled(scene, solid, out, say, record, resume, observers)
-    # the solid's PETSc objects live on the mesh's communicator, whose garbage
-    # petsc4py keeps until it is cleaned on that communicator: the mesh must outlive it
-    del solid
-    free_petsc_garbage(tmesh.mesh.comm)
+            cavity = pressurised_groups(tmesh.facet_names, phys.wellbore)
+            supports = supporting_walls(tmesh.facet_names, cavity, phys.wellbore)
+            summary = run_seepage_ramp(scene, solid, cavity, out, say, record, supports)
+        else:
+            summary = _run_coupled(scene, solid, out, say, record, resume, observers)
+        collective = True
+    except COLLECTIVE_ERRORS:
+        collective = True  # raised on every rank; any other error may be one rank's own,
+        raise  # and a collective destroy there would hang the others instead of failing
+    finally:
+        if collective:
+            # at once: a traceback would keep the solid (its factor: GBs at the default
+            # mesh) alive, and petsc4py keeps a parallel object it lets go as garbage of
+            # the mesh's communicator until that is cleaned (the mesh must outlive it)
+            solid.destroy()
+            del solid
+            free_petsc_garbage(tmesh.mesh.comm)
     return summary
+
+
+#: errors raised on every rank together (each is decided from reduced or broadcast values)
+COLLECTIVE_ERRORS = (SimulationStopped, SolverError, FieldError, OutputInUse)
+
+
+@contextmanager
+def in_scene_file(scene: Scene) -> Iterator[None]:
+    """Name the scene's file in the scene errors raised inside, as loading it does."""
+    try:
+        yield
+    except FieldError as exc:
+        if not scene.source or not Path(scene.source).suffix:
+            raise
+        name = Path(scene.source).name
+        raise SceneError(f"{name}: {exc.path}" if exc.path else name, exc.reason) from None
 
 
 def _write_run_record(out: Path, scene: Scene, comm: MPI.Comm) -> None:
@@ -712,10 +743,12 @@ def _plot_pressure(path: Path, times: list[float], pressures: list[float], found
 
 
 __all__ = [
+    "COLLECTIVE_ERRORS",
     "ROLLER_AXES",
     "OutputInUse",
     "build_fracture",
     "build_solid",
+    "in_scene_file",
     "pressurised_groups",
     "run_scene",
     "scene_fingerprint",
