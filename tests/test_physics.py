@@ -142,6 +142,21 @@ def test_bad_input_names_the_key(changes, key):
     assert key in str(err.value)
 
 
+def test_errors_in_several_sections_are_said_at_once():
+    # before, only the first section's came, and the next run found the next one
+    with pytest.raises(SceneError) as err:
+        scene(rock__poisson_ratio=0.6, fluid__viscosity="1e9 Pa.s", solver__band_rings=-1)
+    said = str(err.value)
+    assert said.startswith("3 sections have an error:")
+    lines = said.splitlines()[1:]
+    assert [line.split(":")[0].strip() for line in lines] == [
+        "rock.poisson_ratio", "fluid.viscosity", "solver.band_rings"
+    ]  # fmt: skip
+    # one error keeps its one-line form: the key first
+    with pytest.raises(SceneError, match=r"^solver\.band_rings: "):
+        scene(solver__band_rings=-1)
+
+
 def test_extra_volume_takes_a_unit_or_a_number_in_m3():
     assert scene().physics.extra_volume == 0.0
     assert scene(injection__extra_volume="0.5 L").physics.extra_volume == pytest.approx(5e-4)

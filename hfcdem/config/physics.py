@@ -640,13 +640,24 @@ def _read_solver(r: _Reader) -> SolverSettings:
 def parse_physics(data: Mapping[str, Any]) -> Physics:
     """Read the physics sections of a parsed scene document (see the module docstring)."""
     r = _Reader(data)
-    try:  # the readers' own checks name the key; the dataclasses check ranges too
-        rock, model, aperture = _read_rock(r)
-        stress = _read_stress(r)
-        fluid = _read_fluid(r)
-        pump = _read_pump(r)
-        output = _read_output(r)
-        solver = _read_solver(r)
+    # every section is read, so one error message names what is wrong in each
+    readers = (_read_rock, _read_stress, _read_fluid, _read_pump, _read_output, _read_solver)
+    read: list[Any] = []
+    errors: list[SceneError] = []
+    for reader in readers:
+        try:
+            read.append(reader(r))
+        except SceneError as exc:
+            errors.append(exc)
+        except ValueError as exc:  # a range the dataclasses check themselves
+            errors.append(_range_error(exc))
+    if len(errors) == 1:
+        raise errors[0]
+    if errors:
+        raise SceneError("", f"{len(errors)} sections have an error:\n" + "\n".join(
+            f"  {exc}" for exc in errors))  # fmt: skip
+    (rock, model, aperture), stress, fluid, pump, output, solver = read
+    try:
         _check(
             pump.get("wall_joints") != "seepage" or solver.max_pressure_change == math.inf,
             "solver.max_pressure_change",
@@ -674,9 +685,14 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
             defaulted=tuple(r.defaulted),
         )
     except ValueError as exc:  # a range the dataclasses check themselves
-        said = str(exc)
-        key = next((k for name, k in _SCENE_KEYS.items() if said.startswith(f"{name} ")), "")
-        raise SceneError(key, said) from None
+        raise _range_error(exc) from None
+
+
+def _range_error(exc: ValueError) -> SceneError:
+    """Return a dataclass's range error as the scene error of the key it names."""
+    said = str(exc)
+    key = next((k for name, k in _SCENE_KEYS.items() if said.startswith(f"{name} ")), "")
+    return SceneError(key, said)
 
 
 #: the scene key of each dataclass field a range check names (its words start with it)
