@@ -7,10 +7,9 @@ first crack at the default mesh, one rank: 4.2 GB resident after the run,
 0.23 GB after :func:`release_memory`).  And petsc4py keeps a parallel
 object that Python has let go as garbage of its communicator until
 :func:`free_petsc_garbage` is called there (``run_scene`` does, on its
-mesh's communicator, after destroying the solid).  That call also frees
-what a destroyed object's Python context held (the low-rank solver's Python
-PC holds the MUMPS factor's KSP), which PETSc's own cleanup loses: until it
-did, about the factor's size stayed
+mesh's communicator).  That call also frees what a destroyed object's Python
+context held (the low-rank solver's Python PC holds the MUMPS factor's KSP),
+which PETSc's own cleanup loses: until it did, about the factor's size stayed
 in use a rank after every run on two ranks (benchmarks/README.md, 2026-12-07).
 
 ``getrusage``'s peak is the process's since it started;
@@ -43,7 +42,7 @@ def _libc() -> ctypes.CDLL | None:
     return libc if libc is not None and hasattr(libc, "malloc_trim") else None
 
 
-def free_petsc_garbage(comm: MPI.Comm, contexts: bool = True) -> None:
+def free_petsc_garbage(comm: MPI.Comm) -> None:
     """Destroy the PETSc objects on ``comm`` that Python has let go (collective).
 
     petsc4py does not destroy a parallel object when Python frees it (that
@@ -59,11 +58,9 @@ def free_petsc_garbage(comm: MPI.Comm, contexts: bool = True) -> None:
     the cleanup replaces by its own when it ends, so nothing destroys them.  The
     live wrappers are therefore held through each cleanup and released after it,
     and the cleanup repeats while that freed any (the ranks agree on it).
-    ``contexts = False`` skips that (a scan of every Python object, 0.1-0.6 s)
-    for a caller that has itself destroyed every object with a Python context.
     """
     gc.collect()
-    if comm.size == 1 or not contexts:  # one process: petsc4py destroys at once
+    if comm.size == 1:  # petsc4py destroys an object of one process at once: no garbage
         PETSc.garbage_cleanup(comm)
         return
     held = _petsc_wrappers()  # (a scan of every object: 0.1-0.6 s, so only in parallel)

@@ -379,9 +379,9 @@ def run_scene(
             # at once: a traceback would keep the solid (its factor: GBs at the default
             # mesh) alive, and petsc4py keeps a parallel object it lets go as garbage of
             # the mesh's communicator until that is cleaned (the mesh must outlive it)
-            solid.destroy()  # the low-rank solver's Python PC with it: no context left
+            solid.destroy()
             del solid
-            free_petsc_garbage(tmesh.mesh.comm, contexts=False)
+            free_petsc_garbage(tmesh.mesh.comm)
     return summary
 
 
