@@ -175,14 +175,8 @@ def _run(args: argparse.Namespace) -> int:
         return _exit_code(summary)
     if summary.get("kind") == "seepage_pumping":
         fc = summary["first_crack_pressure_MPa"]
-        peak = summary["peak_pressure_MPa"]
         say(
-            f"{scene.name}: breakdown "
-            + (
-                f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s"
-                if bd is not None
-                else f"not reached (pressure still at its peak {peak:.2f} MPa)"
-            )
+            f"{scene.name}: breakdown {breakdown_words(summary)}"
             + (
                 f", first break {fc:.2f} MPa ({summary['first_crack']['mode']})"
                 if fc is not None

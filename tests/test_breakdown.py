@@ -58,6 +58,19 @@ def test_a_run_cut_short_by_the_validity_limit_says_its_peak_is_a_lower_bound():
     p = [0.0, 2.1, 4.3, 6.39, 8.14, 7.86]
     note = breakdown_note(p, detect_breakdown(range(len(p)), p), False, validity_limit=True)
     assert note is not None and "validity limit" in note and "lower bound" in note
+    # a solver's stop before the planned end leaves the same doubt
+    said = breakdown_note(p, detect_breakdown(range(len(p)), p), False, stopped=True)
+    assert said == (
+        "the run stopped before a drop confirmed a peak: its highest pressure is a lower bound"
+    )
+    # a confirmed peak that the pressure regained before the stop
+    q = [0.0, 2.0, 4.0, 6.0, 5.0, 4.9, 4.8, 4.7, 6.5, 7.5]
+    found = detect_breakdown(range(len(q)), q)
+    assert found is not None and found.pressure == 6.0
+    assert breakdown_note(q, found, False) is None  # the planned end: the peak stands
+    assert breakdown_note(q, found, False, stopped=True).startswith(
+        "the pressure rose past it before the run stopped"
+    )
     # the same history when the run reached its end: only the drop is too short
     assert breakdown_note(p, None, False) == "no sustained drop after the peak"
     # a confirmed breakdown has no note, however the run ended

@@ -99,14 +99,19 @@ def detect_breakdown(
     )
 
 
-def peak_is_lower_bound(peak: float, breakdown: float | None, validity_limit: bool) -> bool:
+def peak_is_lower_bound(peak: float, breakdown: float | None, ended_early: bool) -> bool:
     """Whether a run's highest pressure ``peak`` only bounds its breakdown from below.
 
-    So it is when the run ended at the model's validity limit and no drop
-    confirmed that peak: no breakdown was confirmed, or a lower one that the
-    pressure then rose past (any unit, the same for both).
+    So it is when the run ended before its planned end (``ended_early``: at the
+    model's validity limit, or stopped) and no drop confirmed that peak: no
+    breakdown was confirmed, or a lower one that the pressure then rose past
+    (any unit, the same for both).
     """
-    return validity_limit and (breakdown is None or breakdown < peak * (1.0 - 1e-9))
+    return ended_early and (breakdown is None or breakdown < peak * (1.0 - 1e-9))
+
+
+def _end_words(validity_limit: bool) -> str:
+    return "the model's validity limit ended the run" if validity_limit else "the run stopped"
 
 
 #: the note of a run that ended on its first crack (``injection.until = "first crack"``)
@@ -120,27 +125,30 @@ def breakdown_note(
     found: Breakdown | None,
     open_crack: bool,
     validity_limit: bool = False,
+    stopped: bool = False,
 ) -> str | None:
     """Say why a history has no breakdown, or why its breakdown is in doubt (else None).
 
     ``open_crack``: the run started from a pre-existing open crack.
     ``validity_limit``: the run ended at the model's validity limit, so its
-    highest pressure is a lower bound of the breakdown, not a peak.
+    highest pressure is a lower bound of the breakdown, not a peak; so it is
+    too when the run ``stopped`` (a solver's stop) before its planned end.
     """
     highest = float(np.max(pressures)) if len(pressures) else 0.0
-    cut_short = peak_is_lower_bound(highest, found.pressure if found else None, validity_limit)
+    early = validity_limit or stopped
+    cut_short = peak_is_lower_bound(highest, found.pressure if found else None, early)
     if found is not None:
         # a peak the pressure regains is no breakdown (module docstring); the stop kept
         # the later one from being confirmed
         return (
-            "the pressure rose past it before the model's validity limit ended the run: "
+            f"the pressure rose past it before {_end_words(validity_limit)}: "
             "the breakdown is at least the highest pressure"
             if cut_short
             else None
         )
     if cut_short:
         return (
-            "the run ended at the model's validity limit before a drop confirmed a peak: "
+            f"{_end_words(validity_limit)} before a drop confirmed a peak: "
             "its highest pressure is a lower bound"
         )
     if len(pressures) < 3:

@@ -500,7 +500,11 @@ def _summarise(
             FIRST_CRACK_END
             if ended_on_first_crack
             else breakdown_note(
-                pressures, found, "crack" in solid.tmesh.facet_names, validity_limit=limit
+                pressures,
+                found,
+                "crack" in solid.tmesh.facet_names,
+                validity_limit=limit,
+                stopped=stopped is not None and not limit,
             )
         ),
         "peak_pressure_MPa": max(pressures) / 1e6 if pressures else None,

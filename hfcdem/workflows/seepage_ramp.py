@@ -416,7 +416,11 @@ def _run_pumped(
             f"({summary['first_crack']['mode']})"
         )
     if pb is not None:
-        say(f"breakdown {pb / 1e6:.4g} MPa at {result.breakdown_time:.4g} s")
+        note = summary["breakdown_note"]
+        say(
+            f"breakdown {pb / 1e6:.4g} MPa at {result.breakdown_time:.4g} s"
+            + (f" ({note})" if note else "")
+        )
     else:
         say(f"no breakdown: {summary['breakdown_note']}")
     return summary
@@ -425,20 +429,22 @@ def _run_pumped(
 def pumping_note(result: PumpingResult) -> str | None:
     """Say why a pumped run has no breakdown, or why its breakdown is in doubt (else None).
 
-    The validity limit leaves a breakdown in doubt when the pressure rose past
-    it before the run stopped: the run's highest pressure then bounds the
+    The validity limit, or a stop, leaves a breakdown in doubt when the pressure
+    rose past it before the run ended: the run's highest pressure then bounds the
     breakdown from below (:func:`hfcdem.coupling.breakdown.peak_is_lower_bound`,
     the rule of the other rungs and of the report).
     """
     if result.ended_on_first_break:
         return FIRST_CRACK_END
-    cut_short = peak_is_lower_bound(result.peak_pressure, result.breakdown, result.validity_limit)
+    early = result.validity_limit or result.stopped is not None
+    cut_short = peak_is_lower_bound(result.peak_pressure, result.breakdown, early)
+    ended = "the model's validity limit ended the run" if result.validity_limit else "it stopped"
     if result.breakdown is not None:
         if not cut_short:
             return None
         return (
             f"the pressure rose past it to {result.peak_pressure / 1e6:.4g} MPa (at "
-            f"{result.peak_time:.4g} s) before the model's validity limit ended the run: "
+            f"{result.peak_time:.4g} s) before {ended}: "
             "the breakdown is at least the highest pressure"
         )
     if result.steps == 0 and result.stopped:
@@ -450,8 +456,9 @@ def pumping_note(result: PumpingResult) -> str | None:
         )
     peak = f"its peak {result.peak_pressure / 1e6:.4g} MPa (at {result.peak_time:.4g} s)"
     if cut_short:
+        end = "ended at the model's validity limit" if result.validity_limit else "stopped"
         return (
-            f"the run ended at the model's validity limit before a sustained drop after a "
+            f"the run {end} before a sustained drop after a "
             f"break confirmed {peak}: the peak is a lower bound"
         )
     return f"no sustained drop after a break confirmed {peak} before the end"
