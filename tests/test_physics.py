@@ -155,6 +155,13 @@ def test_errors_in_several_sections_are_said_at_once():
     # one error keeps its one-line form: the key first
     with pytest.raises(SceneError, match=r"^solver\.band_rings: "):
         scene(solver__band_rings=-1)
+    # a unit error keeps its key as the error's path
+    with pytest.raises(SceneError) as err:
+        scene(rock__youngs_modulus="21.5 m", fluid__viscosity="1e9 Pa.s")
+    assert "  rock.youngs_modulus: " in str(err.value)
+    with pytest.raises(SceneError) as err:
+        scene(rock__youngs_modulus="21.5 m")
+    assert err.value.path == "rock.youngs_modulus"
 
 
 def test_extra_volume_takes_a_unit_or_a_number_in_m3():

@@ -115,7 +115,7 @@ from hfcdem.config.materials import (
     JointAperture,
 )
 from hfcdem.config.tables import SceneError, TomlTable
-from hfcdem.config.units import parse_quantity, show_stress
+from hfcdem.config.units import FieldError, parse_quantity, show_stress
 
 
 def field_default(cls: type, name: str) -> Any:
@@ -647,8 +647,8 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
     for reader in readers:
         try:
             read.append(reader(r))
-        except SceneError as exc:
-            errors.append(exc)
+        except FieldError as exc:  # a scene error, or a unit's: both name their key
+            errors.append(SceneError(exc.path, exc.reason))
         except ValueError as exc:  # a range the dataclasses check themselves
             errors.append(_range_error(exc))
     if len(errors) == 1:
