@@ -746,7 +746,8 @@ class _PumpedCavity:
             self.resolve(self.loads(p, self.seep.pressure), t + dt)
         raise _Dry(
             f"interface states did not settle in {max_iterations} iterations without a break "
-            f"at t = {t + dt:.6g} s ({broken} facets broke in the step)"
+            f"at t = {t + dt:.6g} s ({broken} facets broke in the step); a smaller "
+            "solver.time_step may settle them"
         )
 
     def _wet_share(self) -> float:
