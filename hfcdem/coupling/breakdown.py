@@ -4,10 +4,14 @@ Criterion: follow the running maximum of the injection pressure; a peak is
 confirmed once the pressure has stayed below that maximum by at least
 ``drop_fraction`` of the rise ``max - p_start`` for ``hold`` consecutive records
 (a sustained drop).  The breakdown is the highest confirmed peak: an earlier,
-lower one that the pressure regains is a local event (the first facets at a
-stress concentration breaking and the cavity's volume jumping, as in the Rubin
-case, where such a dip at 1.6 MPa precedes the 6.2 MPa breakdown), not the
-breakdown.  A history that never drops that far for that long has no breakdown (the
+lower one that the pressure regains before a higher peak is confirmed is a local
+event (the first facets at a stress concentration breaking and the cavity's
+volume jumping, as in the Rubin case, where such a dip at 1.6 MPa precedes the
+6.2 MPa breakdown), not the breakdown.  Where the pressure regains a confirmed
+peak and no later peak is confirmed, the earlier one stays the breakdown; a run
+that ended early (the model's validity limit, or a stop) then says that the
+breakdown is at least its highest pressure (:func:`breakdown_note`), and one
+that reached its planned end says nothing more.  A history that never drops that far for that long has no breakdown (the
 pressure is still rising, or only wobbles).  Nor has a history whose peak is
 its first record after the start: the rise to it is not resolved, and a run
 that starts from an open crack (KGD) only propagates, its pressure falling from
