@@ -11,8 +11,9 @@ volume jumping, as in the Rubin case, where such a dip at 1.6 MPa precedes the
 peak and no later peak is confirmed, the earlier one stays the breakdown; a run
 that ended early (the model's validity limit, or a stop) then says that the
 breakdown is at least its highest pressure (:func:`breakdown_note`), and one
-that reached its planned end says nothing more.  A history that never drops that far for that long has no breakdown (the
-pressure is still rising, or only wobbles).  Nor has a history whose peak is
+that reached its planned end says nothing more.  A history that never drops
+that far for that long has no breakdown (the pressure is still rising, or only
+wobbles).  Nor has a history whose peak is
 its first record after the start: the rise to it is not resolved, and a run
 that starts from an open crack (KGD) only propagates, its pressure falling from
 the first step on (:func:`breakdown_note` says which).
