@@ -22,7 +22,7 @@ PHYSICS = {
 
 
 def scene(**changes):
-    doc = {"geometry": GEOMETRY, **{k: dict(v) for k, v in PHYSICS.items()}}
+    doc = {"geometry": dict(GEOMETRY), **{k: dict(v) for k, v in PHYSICS.items()}}
     for dotted, value in changes.items():
         section, key = dotted.split("__")
         doc.setdefault(section, {})
@@ -155,6 +155,12 @@ def test_errors_in_several_sections_are_said_at_once():
     # one error keeps its one-line form: the key first
     with pytest.raises(SceneError, match=r"^solver\.band_rings: "):
         scene(solver__band_rings=-1)
+    # a geometry error comes with the physics' ones
+    with pytest.raises(SceneError) as err:
+        scene(geometry__catalogue="no_such_scene", fluid__viscosity="1e9 Pa.s")
+    lines = str(err.value).splitlines()
+    assert lines[0] == "2 sections have an error:"
+    assert lines[1].startswith("  geometry.catalogue: ") and lines[2].startswith("  fluid.")
     # a unit error keeps its key as the error's path
     with pytest.raises(SceneError) as err:
         scene(rock__youngs_modulus="21.5 m", fluid__viscosity="1e9 Pa.s")

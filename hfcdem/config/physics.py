@@ -114,7 +114,7 @@ from hfcdem.config.materials import (
     InterfaceModel,
     JointAperture,
 )
-from hfcdem.config.tables import SceneError, TomlTable
+from hfcdem.config.tables import SceneError, SceneErrors, TomlTable
 from hfcdem.config.units import FieldError, parse_quantity, show_stress
 
 
@@ -643,19 +643,15 @@ def parse_physics(data: Mapping[str, Any]) -> Physics:
     # every section is read, so one error message names what is wrong in each
     readers = (_read_rock, _read_stress, _read_fluid, _read_pump, _read_output, _read_solver)
     read: list[Any] = []
-    errors: list[SceneError] = []
+    errors: list[FieldError] = []
     for reader in readers:
         try:
             read.append(reader(r))
         except FieldError as exc:  # a scene error, or a unit's: both name their key
-            errors.append(SceneError(exc.path, exc.reason))
+            errors.append(exc)
         except ValueError as exc:  # a range the dataclasses check themselves
             errors.append(_range_error(exc))
-    if len(errors) == 1:
-        raise errors[0]
-    if errors:
-        raise SceneError("", f"{len(errors)} sections have an error:\n" + "\n".join(
-            f"  {exc}" for exc in errors))  # fmt: skip
+    SceneErrors.raise_any(errors)
     (rock, model, aperture), stress, fluid, pump, output, solver = read
     try:
         _check(

@@ -67,7 +67,7 @@ from hfcdem.config.parts import (
 )
 from hfcdem.config.physics import PHYSICS_SECTIONS, field_default, parse_physics
 from hfcdem.config.plates import AngledPathPlate, BoreholeSquare, CrackPlate, KGDStrip
-from hfcdem.config.tables import MISSING, SceneError, TomlTable, build_within
+from hfcdem.config.tables import MISSING, SceneError, SceneErrors, TomlTable, build_within
 from hfcdem.config.units import FieldError, join_path
 
 RESERVED_SECTIONS = ("rock", "stress", "fluid", "injection", "load", "solver", "output")
@@ -489,10 +489,18 @@ def _parse_scene(
     gt = top.table("geometry")
     if gt is None:
         raise SceneError("geometry", "missing; every scene needs a [geometry] table")
-    geometry, preset, chosen = parse_geometry(gt.data, "geometry", resolution, size)
     # [output] alone (a geometry-only scene) does not ask for physics: it is ignored
     wanted = any(k in data for k in PHYSICS_SECTIONS if k != "output")
-    physics = parse_physics(data) if wanted else None
+    errors: list[FieldError] = []  # the geometry's and the physics', said together
+    try:
+        geometry, preset, chosen = parse_geometry(gt.data, "geometry", resolution, size)
+    except FieldError as exc:
+        errors.append(exc)
+    try:
+        physics = parse_physics(data) if wanted else None
+    except FieldError as exc:
+        errors.append(exc)
+    SceneErrors.raise_any(errors)
     ignored = tuple(
         k for k in RESERVED_SECTIONS if k in data and (k not in PHYSICS_SECTIONS or not wanted)
     )

@@ -20,6 +20,28 @@ class SceneError(FieldError):
     """A scene is invalid; ``path`` names the offending field."""
 
 
+class SceneErrors(SceneError):
+    """Several sections of a scene are invalid: ``errors``, one line each when said."""
+
+    def __init__(self, errors: Sequence[FieldError]) -> None:
+        self.errors = tuple(SceneError(e.path, e.reason) for e in errors)
+        lines = "\n".join(f"  {e}" for e in self.errors)
+        super().__init__("", f"{len(self.errors)} sections have an error:\n{lines}")
+
+    def within(self, prefix: str) -> SceneErrors:
+        """Return the same errors with ``prefix`` prepended to each path."""
+        return SceneErrors([e.within(prefix) for e in self.errors])
+
+    @staticmethod
+    def raise_any(errors: Sequence[FieldError]) -> None:
+        """Raise nothing, the one error as a SceneError, or all of them together."""
+        found = [e for group in errors for e in getattr(group, "errors", (group,))]
+        if len(found) == 1:
+            raise SceneError(found[0].path, found[0].reason)
+        if found:
+            raise SceneErrors(found)
+
+
 class TomlTable:
     """One TOML table being read: typed getters that name fields, and unknown-key checks."""
 
@@ -119,4 +141,4 @@ def build_within(path: str, make: Callable[..., T], *args: Any, **kwargs: Any) -
         raise exc.within(path) from None
 
 
-__all__ = ["MISSING", "SceneError", "T", "TomlTable", "build_within"]
+__all__ = ["MISSING", "SceneError", "SceneErrors", "T", "TomlTable", "build_within"]
