@@ -178,7 +178,8 @@ def _run(args: argparse.Namespace) -> int:
         say(
             f"{scene.name}: breakdown {breakdown_words(summary)}"
             + (
-                f", first break {fc:.2f} MPa ({summary['first_crack']['mode']})"
+                f", first break {fc:.2f} MPa at {summary['first_crack_time_s']:.3g} s "
+                f"({summary['first_crack']['mode']})"
                 if fc is not None
                 else ""
             )

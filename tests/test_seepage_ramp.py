@@ -403,10 +403,17 @@ def test_a_pumped_run_cut_short_says_its_peak_is_a_lower_bound():
         )  # fmt: skip
         return PumpingResult(**{**base, **kw})
 
-    said = pumping_note(result())
+    broke = dict(first_pressure=50e6, first_time=40.0, first_mode=1)
+    said = pumping_note(result(**broke))
     assert said.startswith("no sustained drop after a break confirmed its peak 64.2")
+    # nothing broke, or the pressure highest at the end: said so, as the other rungs do
+    assert pumping_note(result()) == "no interface broke by the end of the run"
+    rising = pumping_note(result(**broke, history=[(90.0, 60e6), (95.0, 64.2e6)]))
+    assert rising == "the pressure still rises at the end of the run"
+    assert pumping_note(result(**broke, history=[(95.0, 64.2e6), (99.0, 63e6)])) == said
     cut = pumping_note(result(validity_limit=True, stopped="a block slid out"))
-    assert cut.startswith("the run ended at the model's validity limit") and "lower bound" in cut
+    assert cut.startswith("the model's validity limit ended the run before")
+    assert "lower bound" in cut
     assert pumping_note(result(breakdown=64.2e6, breakdown_time=95.0)) is None
     assert "never rose" in pumping_note(result(peak_time=0.0))
     before = pumping_note(result(peak_time=0.0, steps=0, stopped="a block slid out"))
@@ -421,7 +428,22 @@ def test_a_pumped_run_cut_short_says_its_peak_is_a_lower_bound():
     # "breakdown 61.21 MPa" was said alone while the pressure had reached 200.6 MPa)
     stop = dict(surpassed, validity_limit=False, stopped="interface states did not settle")
     stopped = pumping_note(result(**stop))
-    assert stopped.startswith("the pressure rose past it to 64.2 MPa") and "it stopped" in stopped
+    assert stopped.startswith("the pressure rose past it to 64.2 MPa")
+    assert "before the run stopped" in stopped
     bounded = pumping_note(result(validity_limit=False, stopped="did not settle"))
     assert bounded.startswith("the run stopped before a sustained drop")
     assert bounded.endswith("the peak is a lower bound")
+
+
+def test_a_pumped_run_says_its_breakdown_once_on_the_last_line(shared_tmp_path, capsys):
+    from hfcdem.cli import main
+
+    # 2 s of the shipped pumping: the pressure rises to 2.3 MPa and nothing breaks
+    out = shared_tmp_path / "said_once"
+    args = ["run", str(PUMPING), "--resolution", "coarse", "-o", str(out)]
+    assert main([*args, "--set", 'injection.duration="2 s"']) == 0
+    if MPI.COMM_WORLD.rank == 0:
+        lines = capsys.readouterr().out.splitlines()
+        note = "no interface broke by the end of the run"
+        assert [line for line in lines if note in line or "breakdown" in line] == [lines[-1]]
+        assert lines[-1].startswith(f"borehole_pumping: breakdown none ({note}; highest ")

@@ -115,7 +115,8 @@ def peak_is_lower_bound(peak: float, breakdown: float | None, ended_early: bool)
     return ended_early and (breakdown is None or breakdown < peak * (1.0 - 1e-9))
 
 
-def _end_words(validity_limit: bool) -> str:
+def end_words(validity_limit: bool) -> str:
+    """Say how a run ended early: at the model's validity limit, or stopped (every rung's words)."""
     return "the model's validity limit ended the run" if validity_limit else "the run stopped"
 
 
@@ -146,14 +147,14 @@ def breakdown_note(
         # a peak the pressure regains is no breakdown (module docstring); the stop kept
         # the later one from being confirmed
         return (
-            f"the pressure rose past it before {_end_words(validity_limit)}: "
+            f"the pressure rose past it before {end_words(validity_limit)}: "
             "the breakdown is at least the highest pressure"
             if cut_short
             else None
         )
     if cut_short:
         return (
-            f"{_end_words(validity_limit)} before a drop confirmed a peak: "
+            f"{end_words(validity_limit)} before a drop confirmed a peak: "
             "its highest pressure is a lower bound"
         )
     if len(pressures) < 3:
@@ -176,5 +177,6 @@ __all__ = [
     "Breakdown",
     "breakdown_note",
     "detect_breakdown",
+    "end_words",
     "peak_is_lower_bound",
 ]

@@ -39,7 +39,7 @@ from hfcdem.config.physics import Physics
 from hfcdem.config.scene import Scene
 from hfcdem.config.tables import SceneError
 from hfcdem.config.units import show_stress
-from hfcdem.coupling.breakdown import FIRST_CRACK_END, peak_is_lower_bound
+from hfcdem.coupling.breakdown import FIRST_CRACK_END, end_words, peak_is_lower_bound
 from hfcdem.coupling.penetration import CavityPumping, PressureRamp, ramp_breakdown
 from hfcdem.coupling.pumping import COST_COLUMNS, PumpingResult, pump_with_seepage
 from hfcdem.io.files import write_csv, write_interfaces, write_json
@@ -410,19 +410,6 @@ def _run_pumped(
         )
         plot_first_crack_stress(out, scene, summary["first_crack"])
     comm.barrier()
-    if first is not None:
-        say(
-            f"first break {first / 1e6:.4g} MPa at {result.first_time:.4g} s "
-            f"({summary['first_crack']['mode']})"
-        )
-    if pb is not None:
-        note = summary["breakdown_note"]
-        say(
-            f"breakdown {pb / 1e6:.4g} MPa at {result.breakdown_time:.4g} s"
-            + (f" ({note})" if note else "")
-        )
-    else:
-        say(f"no breakdown: {summary['breakdown_note']}")
     return summary
 
 
@@ -438,7 +425,7 @@ def pumping_note(result: PumpingResult) -> str | None:
         return FIRST_CRACK_END
     early = result.validity_limit or result.stopped is not None
     cut_short = peak_is_lower_bound(result.peak_pressure, result.breakdown, early)
-    ended = "the model's validity limit ended the run" if result.validity_limit else "it stopped"
+    ended = end_words(result.validity_limit)
     if result.breakdown is not None:
         if not cut_short:
             return None
@@ -456,11 +443,14 @@ def pumping_note(result: PumpingResult) -> str | None:
         )
     peak = f"its peak {result.peak_pressure / 1e6:.4g} MPa (at {result.peak_time:.4g} s)"
     if cut_short:
-        end = "ended at the model's validity limit" if result.validity_limit else "stopped"
         return (
-            f"the run {end} before a sustained drop after a "
+            f"{ended} before a sustained drop after a "
             f"break confirmed {peak}: the peak is a lower bound"
         )
+    if result.first_time is None:
+        return "no interface broke by the end of the run"
+    if result.history and result.peak_time >= result.history[-1][0]:
+        return "the pressure still rises at the end of the run"
     return f"no sustained drop after a break confirmed {peak} before the end"
 
 
