@@ -32,7 +32,7 @@ from mpi4py import MPI
 
 import hfcdem
 from hfcdem import analytic
-from hfcdem.cli import parse_with_petsc_options
+from hfcdem.workflows.demos import parse_demo_line, run_demo
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -142,8 +142,7 @@ def main(argv: list[str] | None = None) -> dict:
     """Walk through the API on the Sneddon plate; return what was measured."""
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("-o", "--output", default="results/api_tour")
-    args = parse_with_petsc_options(parser, argv)  # PETSc options too
-    say = print if MPI.COMM_WORLD.rank == 0 else (lambda *a, **k: None)
+    args, say = parse_demo_line(parser, argv)  # PETSc options too
 
     scene = read_scene(say)
     mesh, cells = mesh_scene(scene, MPI.COMM_WORLD, say)
@@ -157,4 +156,4 @@ def main(argv: list[str] | None = None) -> dict:
 
 # %%
 if __name__ == "__main__":
-    main()
+    run_demo(main)

@@ -80,7 +80,6 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.cli import parse_with_petsc_options
 from hfcdem.config.materials import ElasticMaterial, InSituStress, InterfaceModel
 from hfcdem.config.parts import MeshSizing, Plate, Wellbore
 from hfcdem.config.plates import BoreholeSquare
@@ -92,6 +91,7 @@ from hfcdem.mesh.build import mesh_geometry
 from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solid.cdem import CascadeStopped, CDEMSolid, Loads
 from hfcdem.solid.interfaces import FacetState
+from hfcdem.workflows.demos import parse_demo_line, run_demo
 
 MPa = 1e6
 
@@ -211,13 +211,9 @@ def main(argv: list[str] | None = None) -> dict:
         "--max-iterations", type=int, default=200, help="re-solves per cascade of breaks"
     )
     parser.add_argument("--no-pictures", action="store_true")
-    args = parse_with_petsc_options(parser, argv)  # PETSc options too
+    args, log = parse_demo_line(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
     t_start = time.perf_counter()
-
-    def log(msg: str) -> None:
-        if comm.rank == 0:
-            print(msg, flush=True)
 
     out = prepare_output_dir(args.output, comm)
     a = args.radius
@@ -348,4 +344,4 @@ def main(argv: list[str] | None = None) -> dict:
 
 # %%
 if __name__ == "__main__":
-    main()
+    run_demo(main)

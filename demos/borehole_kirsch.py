@@ -70,7 +70,6 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem import analytic
-from hfcdem.cli import parse_with_petsc_options
 from hfcdem.config.materials import ElasticMaterial, InSituStress
 from hfcdem.config.parts import MeshSizing, Plate, Wellbore
 from hfcdem.config.plates import BoreholeSquare
@@ -80,6 +79,7 @@ from hfcdem.io.plots import plot_lines, render_field
 from hfcdem.io.sampling import evaluate_at_points, interpolate_expression
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.solid.elastic import solve_cavity_pressure
+from hfcdem.workflows.demos import parse_demo_line, run_demo
 
 MPa = 1e6
 
@@ -153,13 +153,9 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--pressure", type=float, default=20.0, help="wellbore pressure [MPa]")
     parser.add_argument("--tensile-strength", type=float, default=3.0, help="T [MPa]")
     parser.add_argument("--no-pictures", action="store_true")
-    args = parse_with_petsc_options(parser, argv)  # PETSc options too
+    args, log = parse_demo_line(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
     t_start = time.perf_counter()
-
-    def log(msg: str) -> None:
-        if comm.rank == 0:
-            print(msg, flush=True)
 
     out = prepare_output_dir(args.output, comm)
 
@@ -278,4 +274,4 @@ def main(argv: list[str] | None = None) -> dict:
 
 # %%
 if __name__ == "__main__":
-    main()
+    run_demo(main)

@@ -61,16 +61,10 @@ fields.bp, interfaces.pvd).
 
 from __future__ import annotations
 
-import argparse
-import sys
 from pathlib import Path
 
-from mpi4py import MPI
-
-from hfcdem.cli import parse_with_petsc_options
-from hfcdem.config.scene import load_scene
 from hfcdem.references import FIELD_FIRST_CRACK_S, FIELD_MEASURED, FIELD_PAPER_SIMULATED
-from hfcdem.workflows.run import OutputInUse, run_scene
+from hfcdem.workflows.demos import demo_parser, parse_demo_line, run_demo, run_scene_file
 from hfcdem.workflows.study import breakdown_text
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
@@ -91,20 +85,9 @@ ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 # %%
 def main(argv: list[str] | None = None) -> dict:
     """Run the demo; return the run's summary."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("-o", "--output", default="results/field_cluster")
-    parser.add_argument("--resolution", default="coarse", help="mesh resolution of the scene")
-    parser.add_argument("--duration", default=None, help="injection time, e.g. '120 s'")
-    parser.add_argument("--force", action="store_true", help="overwrite another scene's results")
-    args = parse_with_petsc_options(parser, argv)  # PETSc options too
-    comm = MPI.COMM_WORLD
-    say = print if comm.rank == 0 else (lambda *a, **k: None)
-
-    overrides = {"injection.duration": args.duration} if args.duration else None
-    scene = load_scene(
-        ROOT / "meshes/scenes/field_cluster.toml", args.resolution, overrides=overrides
-    )
-    summary = run_scene(scene, args.output, comm, force=args.force, say=say)
+    parser = demo_parser(__doc__, "results/field_cluster")
+    args, say = parse_demo_line(parser, argv)  # PETSc options too
+    summary = run_scene_file(ROOT / "meshes/scenes/field_cluster.toml", args, say)
 
     bd = summary["breakdown_pressure_MPa"]
     gap = f" ({bd / FIELD_MEASURED - 1:+.1%})" if bd else ""
@@ -139,9 +122,4 @@ def main(argv: list[str] | None = None) -> dict:
 
 # %%
 if __name__ == "__main__":
-    try:
-        main()
-    except OutputInUse as exc:  # another scene's results: say so once, keep them
-        if MPI.COMM_WORLD.rank == 0:
-            print(f"error: {exc}", file=sys.stderr)
-        raise SystemExit(3) from None
+    run_demo(main)

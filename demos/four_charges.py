@@ -63,15 +63,12 @@ ordering matches.  Written: results.csv, study.png, one folder per case
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
-from mpi4py import MPI
-
-from hfcdem.cli import parse_with_petsc_options
 from hfcdem.references import CHARGE_NAMES, CHARGES
 from hfcdem.reproduce.compare import PEAK_MESH_ERROR, resolved
-from hfcdem.workflows.study import breakdown_text, load_study, pick_metric, run_study
+from hfcdem.workflows.demos import demo_parser, parse_demo_line, run_demo, run_study_file
+from hfcdem.workflows.study import breakdown_text, pick_metric
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 
@@ -92,22 +89,9 @@ ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 # %%
 def main(argv: list[str] | None = None) -> list[dict]:
     """Run the demo; return one result row per charge."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("-o", "--output", default="results/four_charges")
-    parser.add_argument("--resolution", default="coarse", help="mesh resolution of the scene")
-    parser.add_argument("--groups", type=int, default=1, help="cases run at once")
-    parser.add_argument(
-        "--force", action="store_true", help="run every case again, over other settings' runs"
-    )
-    parser.add_argument("--duration", default=None, help="injection time, e.g. '120 s'")
-    args = parse_with_petsc_options(parser, argv)  # PETSc options too
-    comm = MPI.COMM_WORLD
-    say = print if comm.rank == 0 else (lambda *a, **k: None)
-
-    study = load_study(ROOT / "studies/four_charges.toml", resolution=args.resolution)
-    if args.duration:
-        study = study.with_fixed({"injection.duration": args.duration})
-    rows = run_study(study, args.output, comm, groups=args.groups, force=args.force, say=say)
+    parser = demo_parser(__doc__, "results/four_charges", study=True)
+    args, say = parse_demo_line(parser, argv)  # PETSc options too
+    rows = run_study_file(ROOT / "studies/four_charges.toml", args, say)
 
     # what we get next to what the paper printed (Fig. 15 and 19); the ranking is by
     # peak pressure, and there is none unless every case cracked
@@ -150,4 +134,4 @@ def main(argv: list[str] | None = None) -> list[dict]:
 
 # %%
 if __name__ == "__main__":
-    main()
+    run_demo(main)

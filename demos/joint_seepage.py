@@ -37,18 +37,16 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 from mpi4py import MPI
 
-from hfcdem.cli import parse_with_petsc_options
 from hfcdem.config.geometry import Scene
 from hfcdem.config.materials import Fluid
 from hfcdem.config.scene import load_scene
-from hfcdem.config.units import parse_quantity
+from hfcdem.config.units import FieldError, parse_quantity
 from hfcdem.coupling.condense import cavity_vertices
 from hfcdem.flow.seepage import JointSeepage, joint_network, network_positions
 from hfcdem.io.files import prepare_output_dir, write_atomic, write_csv, write_interfaces
@@ -58,6 +56,7 @@ from hfcdem.mesh.build import create_scene_mesh
 from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.interfaces import FacetState
+from hfcdem.workflows.demos import parse_demo_line, run_demo
 from hfcdem.workflows.run import build_solid, pressurised_groups
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -88,7 +87,7 @@ def wall_pressure(text: str) -> float:
     """The tunnel wall's water pressure (Pa) from ``text`` such as '60 MPa'."""
     pressure = parse_quantity(text, "stress", "--pressure")
     if not (math.isfinite(pressure) and pressure > 0.0):
-        raise ValueError(f"--pressure must be > 0 Pa, got {text!r}")
+        raise FieldError("--pressure", f"expected a pressure > 0 Pa, got {text!r}")
     return pressure
 
 
@@ -101,9 +100,12 @@ def joint_aperture(text: str | None, fluid: Fluid) -> float:
 
 def picture_times(text: str) -> list[float]:
     """The picture times (s), sorted, from comma-separated positive seconds."""
-    times = sorted(float(t) for t in text.split(","))
-    if not times or times[0] <= 0.0:
-        raise ValueError(f"--times must be positive seconds, got {text!r}")
+    try:
+        times = sorted(float(t) for t in text.split(","))
+    except ValueError:
+        times = []
+    if not times or not (0.0 < times[0] and math.isfinite(times[-1])):
+        raise FieldError("--times", f"expected positive seconds such as '1,10,60', got {text!r}")
     return times
 
 
@@ -307,9 +309,8 @@ def main(argv: list[str] | None = None) -> dict:
         "--times", default="0.05,0.2,1,5", help="picture times (s), comma separated"
     )
     parser.add_argument("--no-pictures", action="store_true", help="skip saturation.png")
-    args = parse_with_petsc_options(parser, argv)
+    args, say = parse_demo_line(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
-    say = print if comm.rank == 0 else (lambda *a, **k: None)
 
     scene = load_no2_scene(args.resolution)
     pressure = wall_pressure(args.pressure)
@@ -340,9 +341,4 @@ def main(argv: list[str] | None = None) -> dict:
 
 # %%
 if __name__ == "__main__":
-    try:
-        main()
-    except (ValueError, KeyError) as err:
-        if MPI.COMM_WORLD.rank == 0:
-            print(f"error: {err}", file=sys.stderr)
-        sys.exit(2)
+    run_demo(main)

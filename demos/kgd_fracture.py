@@ -75,7 +75,6 @@ import numpy as np
 from mpi4py import MPI
 
 from hfcdem.analytic import kgd_viscosity
-from hfcdem.cli import parse_with_petsc_options
 from hfcdem.config.materials import ElasticMaterial, Fluid, Injection, InSituStress, InterfaceModel
 from hfcdem.config.parts import Crack, MeshSizing, Plate
 from hfcdem.config.plates import KGDStrip
@@ -85,6 +84,7 @@ from hfcdem.io.files import prepare_output_dir, write_interfaces, write_json
 from hfcdem.mesh.build import mesh_geometry
 from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solid.cdem import CDEMSolid
+from hfcdem.workflows.demos import parse_demo_line, run_demo
 
 # seed 000, section 4.2: rock, water and the pump (per metre of fracture height)
 ROCK = ElasticMaterial(youngs_modulus=25e9, poisson_ratio=0.25)
@@ -173,10 +173,9 @@ def main(argv: list[str] | None = None) -> dict:
     parser.add_argument("--dt", type=float, default=0.5, help="time step, s")
     parser.add_argument("--t-end", type=float, default=10.0, help="injection time, s")
     parser.add_argument("--stress", type=float, default=0.0, help="background stress, MPa")
-    args = parse_with_petsc_options(parser, argv)  # PETSc options too
+    args, say = parse_demo_line(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
     out = prepare_output_dir(args.output, comm)
-    say = print if comm.rank == 0 else (lambda *a, **k: None)
     wall0 = time.perf_counter()
     stress = args.stress * 1e6
 
@@ -194,8 +193,7 @@ def main(argv: list[str] | None = None) -> dict:
             f"t {rec.time:5.2f} s  half-length {length:6.2f} m ({ref.half_length:6.2f})  "
             f"net pressure {(rec.injection_pressure - stress) / 1e6:6.4f} MPa "
             f"({ref.net_pressure / 1e6:6.4f})  opening {opening * 1e3:6.4f} mm "
-            f"({ref.inlet_opening * 1e3:6.4f})  wall {rec.wall_time:5.1f} s",
-            flush=True,
+            f"({ref.inlet_opening * 1e3:6.4f})  wall {rec.wall_time:5.1f} s"
         )
 
     t_end, length, p_net, opening, ref = rows[-1]
@@ -291,4 +289,4 @@ def _plot(path, rows) -> None:
 
 # %%
 if __name__ == "__main__":
-    main()
+    run_demo(main)

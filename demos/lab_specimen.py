@@ -62,15 +62,12 @@ fracture.png (the fracture seen along the wellbore: does it turn toward SH?).
 
 from __future__ import annotations
 
-import argparse
 import itertools
 from pathlib import Path
 
-from mpi4py import MPI
-
-from hfcdem.cli import parse_with_petsc_options
 from hfcdem.references import LAB_MEASURED, LAB_PAPER_SIMULATED
-from hfcdem.workflows.study import breakdown_text, load_study, numeric, run_study
+from hfcdem.workflows.demos import demo_parser, parse_demo_line, run_demo, run_study_file
+from hfcdem.workflows.study import breakdown_text, numeric
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 
@@ -94,22 +91,9 @@ ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 # %%
 def main(argv: list[str] | None = None) -> list[dict]:
     """Run the demo; return one result row per azimuth."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("-o", "--output", default="results/lab_specimen")
-    parser.add_argument("--resolution", default="coarse", help="mesh resolution of the scene")
-    parser.add_argument("--groups", type=int, default=1, help="cases run at once")
-    parser.add_argument(
-        "--force", action="store_true", help="run every case again, over other settings' runs"
-    )
-    parser.add_argument("--duration", default=None, help="injection time, e.g. '30 s'")
-    args = parse_with_petsc_options(parser, argv)  # PETSc options too
-    comm = MPI.COMM_WORLD
-    say = print if comm.rank == 0 else (lambda *a, **k: None)
-
-    study = load_study(ROOT / "studies/lab_azimuth.toml", resolution=args.resolution)
-    if args.duration:
-        study = study.with_fixed({"injection.duration": args.duration})
-    rows = run_study(study, args.output, comm, groups=args.groups, force=args.force, say=say)
+    parser = demo_parser(__doc__, "results/lab_specimen", study=True, duration_example="30 s")
+    args, say = parse_demo_line(parser, argv)  # PETSc options too
+    rows = run_study_file(ROOT / "studies/lab_azimuth.toml", args, say)
 
     ours = []
     for row in rows:
@@ -146,4 +130,4 @@ def main(argv: list[str] | None = None) -> list[dict]:
 
 # %%
 if __name__ == "__main__":
-    main()
+    run_demo(main)

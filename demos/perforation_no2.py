@@ -49,16 +49,10 @@ pictures and ParaView files are.
 
 from __future__ import annotations
 
-import argparse
-import sys
 from pathlib import Path
 
-from mpi4py import MPI
-
-from hfcdem.cli import parse_with_petsc_options
-from hfcdem.config.scene import load_scene
 from hfcdem.references import CHARGES
-from hfcdem.workflows.run import OutputInUse, run_scene
+from hfcdem.workflows.demos import demo_parser, parse_demo_line, run_demo, run_scene_file
 from hfcdem.workflows.study import breakdown_text
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
@@ -77,19 +71,9 @@ ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 # %%
 def main(argv: list[str] | None = None) -> dict:
     """Run the demo; return the run's summary."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("-o", "--output", default="results/perforation_no2")
-    parser.add_argument("--resolution", default="coarse", help="'coarse', 'default' or 'paper'")
-    parser.add_argument("--duration", default=None, help="injection time, e.g. '120 s'")
-    parser.add_argument("--force", action="store_true", help="overwrite another scene's results")
-    args = parse_with_petsc_options(parser, argv)  # PETSc options too
-    comm = MPI.COMM_WORLD
-    say = print if comm.rank == 0 else (lambda *a, **k: None)
-
-    overrides = {"injection.duration": args.duration} if args.duration else None
-    resolution = None if args.resolution == "default" else args.resolution
-    scene = load_scene(ROOT / "meshes/scenes/perforation_no2.toml", resolution, overrides=overrides)
-    summary = run_scene(scene, args.output, comm, force=args.force, say=say)
+    parser = demo_parser(__doc__, "results/perforation_no2")
+    args, say = parse_demo_line(parser, argv)  # PETSc options too
+    summary = run_scene_file(ROOT / "meshes/scenes/perforation_no2.toml", args, say)
 
     bd = summary["breakdown_pressure_MPa"]
     gap = f" ({bd / CHARGES['no2'] - 1:+.1%})" if bd else ""
@@ -145,9 +129,4 @@ def main(argv: list[str] | None = None) -> dict:
 
 # %%
 if __name__ == "__main__":
-    try:
-        main()
-    except OutputInUse as exc:  # another scene's results: say so once, keep them
-        if MPI.COMM_WORLD.rank == 0:
-            print(f"error: {exc}", file=sys.stderr)
-        raise SystemExit(3) from None
+    run_demo(main)

@@ -72,15 +72,12 @@ fracture degree per model), one folder per case.
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
-from mpi4py import MPI
-
-from hfcdem.cli import parse_with_petsc_options
 from hfcdem.references import SHAPE_ORDERINGS, SHAPES
 from hfcdem.reproduce.compare import PEAK_MESH_ERROR, resolved
-from hfcdem.workflows.study import breakdown_text, load_study, pick_metric, run_study
+from hfcdem.workflows.demos import demo_parser, parse_demo_line, run_demo, run_study_file
+from hfcdem.workflows.study import breakdown_text, pick_metric
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 
@@ -100,25 +97,15 @@ ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 # %%
 def main(argv: list[str] | None = None) -> list[dict]:
     """Run the demo; return one result row per model."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("-o", "--output", default="results/shape_study")
-    parser.add_argument("--resolution", default="coarse", help="mesh resolution of the scene")
-    parser.add_argument("--groups", type=int, default=1, help="cases run at once")
-    parser.add_argument(
-        "--force", action="store_true", help="run every case again, over other settings' runs"
-    )
-    parser.add_argument("--duration", default=None, help="injection time, e.g. '120 s'")
+    parser = demo_parser(__doc__, "results/shape_study", study=True)
     parser.add_argument("--models", default=None, help="comma-separated subset, e.g. no2,1-1")
-    args = parse_with_petsc_options(parser, argv)  # PETSc options too
-    comm = MPI.COMM_WORLD
-    say = print if comm.rank == 0 else (lambda *a, **k: None)
-
-    study = load_study(ROOT / "studies/shape_study.toml", resolution=args.resolution)
-    if args.models:
-        study = study.with_values(tuple(args.models.split(",")))
-    if args.duration:
-        study = study.with_fixed({"injection.duration": args.duration})
-    rows = run_study(study, args.output, comm, groups=args.groups, force=args.force, say=say)
+    args, say = parse_demo_line(parser, argv)  # PETSc options too
+    rows = run_study_file(
+        ROOT / "studies/shape_study.toml",
+        args,
+        say,
+        args.models.split(",") if args.models else None,
+    )
 
     ours, metric = pick_metric(rows)
     for row in rows:
@@ -157,4 +144,4 @@ def main(argv: list[str] | None = None) -> list[dict]:
 
 # %%
 if __name__ == "__main__":
-    main()
+    run_demo(main)

@@ -45,15 +45,13 @@ crack_opening.csv and .png, fields.bp and interfaces.pvd for ParaView.
 
 from __future__ import annotations
 
-import argparse
-import sys
 from pathlib import Path
 
 from mpi4py import MPI
 
-from hfcdem.cli import parse_with_petsc_options
 from hfcdem.config.scene import load_scene
-from hfcdem.workflows.run import OutputInUse, run_scene
+from hfcdem.workflows.demos import demo_parser, parse_demo_line, run_demo
+from hfcdem.workflows.run import run_scene
 
 ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 
@@ -69,15 +67,12 @@ ROOT = Path(__file__).resolve().parents[1]  # the checkout: scenes and studies
 # %%
 def main(argv: list[str] | None = None) -> dict:
     """Run the demo; return the run's summary."""
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("-o", "--output", default="results/sneddon")
+    parser = demo_parser(__doc__, "results/sneddon", scene=False)
     parser.add_argument("--half-width", type=float, default=0.5, help="plate half width, m")
     parser.add_argument("--size", type=float, default=0.005, help="element size at the crack, m")
     parser.add_argument("--alpha", type=float, default=100.0, help="spring factor alpha")
-    parser.add_argument("--force", action="store_true", help="overwrite another scene's results")
-    args = parse_with_petsc_options(parser, argv)  # PETSc options too
+    args, say = parse_demo_line(parser, argv)  # PETSc options too
     comm = MPI.COMM_WORLD
-    say = print if comm.rank == 0 else (lambda *a, **k: None)
 
     # the far field grows with the plate; the crack keeps its element size
     width = 2.0 * args.half_width
@@ -110,9 +105,4 @@ def main(argv: list[str] | None = None) -> dict:
 
 # %%
 if __name__ == "__main__":
-    try:
-        main()
-    except OutputInUse as exc:  # another scene's results: say so once, keep them
-        if MPI.COMM_WORLD.rank == 0:
-            print(f"error: {exc}", file=sys.stderr)
-        raise SystemExit(3) from None
+    run_demo(main)

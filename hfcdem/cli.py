@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -23,16 +23,6 @@ def _info(args: argparse.Namespace) -> int:
     return 0
 
 
-def _printer(comm: Any) -> Callable[..., None]:
-    """Return ``say(msg, err=False)``: print from rank 0 only (stderr for errors)."""
-
-    def say(msg: str, err: bool = False) -> None:
-        if comm.rank == 0:
-            print(msg, file=sys.stderr if err else sys.stdout, flush=True)
-
-    return say
-
-
 def _scene_files(args: argparse.Namespace) -> list[Path]:
     files = [Path(f) for f in args.scenes]
     if args.all:
@@ -46,12 +36,13 @@ def _mesh(args: argparse.Namespace) -> int:
     from hfcdem.config.scene import load_scene
     from hfcdem.config.tables import SceneError
     from hfcdem.config.units import FieldError, parse_quantity
+    from hfcdem.io.progress import printer
     from hfcdem.mesh.build import mesh_scene
     from hfcdem.mesh.tagged import MeshingError
 
     comm = MPI.COMM_WORLD
 
-    say = _printer(comm)
+    say = printer(comm)
 
     files = _scene_files(args)
     if not files:
@@ -118,12 +109,13 @@ def _run(args: argparse.Namespace) -> int:
     from hfcdem.config.scene import load_scene
     from hfcdem.config.units import FieldError
     from hfcdem.coupling.breakdown import FIRST_CRACK_END
+    from hfcdem.io.progress import printer
     from hfcdem.mesh.tagged import MeshingError
     from hfcdem.workflows.run import OutputInUse, run_scene
 
     comm = MPI.COMM_WORLD
 
-    say = _printer(comm)
+    say = printer(comm)
 
     try:
         scene = load_scene(args.scene, args.resolution, overrides=_overrides(args.set))
@@ -250,13 +242,14 @@ def _study(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
     from hfcdem.config.units import FieldError
+    from hfcdem.io.progress import printer
     from hfcdem.workflows.convergence import study_kind
     from hfcdem.workflows.run import OutputInUse
     from hfcdem.workflows.study import load_study, run_study
 
     comm = MPI.COMM_WORLD
 
-    say = _printer(comm)
+    say = printer(comm)
 
     try:
         if args.convergence or (args.study and study_kind(args.study) == "convergence"):
@@ -443,10 +436,11 @@ def _add_study(sub: Any) -> None:
 def _reproduce(args: argparse.Namespace) -> int:
     from mpi4py import MPI
 
+    from hfcdem.io.progress import printer
     from hfcdem.reproduce.runner import run_reproduction
 
     comm = MPI.COMM_WORLD
-    say = _printer(comm)
+    say = printer(comm)
     only = [n.strip() for n in args.only.split(",") if n.strip()] if args.only else None
     try:
         records = run_reproduction(
@@ -603,8 +597,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     from mpi4py import MPI
 
     from hfcdem.io.files import OutputDirError
+    from hfcdem.io.progress import printer
 
-    say = _printer(MPI.COMM_WORLD)
+    say = printer(MPI.COMM_WORLD)
     try:
         return int(args.func(args))
     except OutputDirError as exc:

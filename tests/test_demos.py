@@ -246,3 +246,52 @@ def test_api_tour_runs_the_chain_and_reads_back_sneddons_plate(shared_tmp_path):
     assert -0.06 < gap < -0.02
     assert tour["cells"] > 100
     assert (out / "crack_opening.csv").stat().st_size > 0
+
+
+def test_a_demo_given_bad_input_ends_with_one_line_naming_the_field(shared_tmp_path, capsys):
+    from hfcdem.workflows.demos import run_demo
+
+    # before, a --duration that is no time ended in a SceneError traceback on every rank
+    out = shared_tmp_path / "bad_duration"
+    no2 = load("perforation_no2")
+    with pytest.raises(SystemExit) as ended:
+        run_demo(lambda: no2.main(["-o", str(out), "--duration", "abc"]))
+    assert ended.value.code == 2
+    assert not out.exists()  # nothing was meshed or written
+    seepage = load("joint_seepage")
+    with pytest.raises(SystemExit) as ended:
+        run_demo(lambda: seepage.main(["-o", str(out), "--times", "1,x"]))
+    assert ended.value.code == 2
+    if MPI.COMM_WORLD.rank == 0:
+        err = capsys.readouterr().err.splitlines()
+        assert err == [
+            "error: perforation_no2.toml: injection.duration: expected a time such as "
+            "'60 s', got 'abc'",
+            "error: --times: expected positive seconds such as '1,10,60', got '1,x'",
+        ]
+
+
+def test_a_demo_whose_output_holds_another_scenes_results_keeps_them_and_exits_3(capsys):
+    from hfcdem.workflows.demos import run_demo
+    from hfcdem.workflows.run import OutputInUse
+
+    def clash():
+        raise OutputInUse("results/x holds another scene's results")
+
+    with pytest.raises(SystemExit) as ended:
+        run_demo(clash)
+    assert ended.value.code == 3
+    if MPI.COMM_WORLD.rank == 0:
+        assert capsys.readouterr().err == "error: results/x holds another scene's results\n"
+
+
+def test_a_study_demo_takes_the_scene_and_study_options():
+    from hfcdem.workflows.demos import demo_parser
+
+    args = demo_parser("Four charges.\n\nMore.", "results/x", study=True).parse_args(
+        ["--resolution", "default", "--duration", "30 s", "--groups", "2", "--force"]
+    )
+    assert (args.output, args.resolution, args.duration) == ("results/x", "default", "30 s")
+    assert args.groups == 2 and args.force
+    plain = demo_parser(None, "results/y", scene=False).parse_args([])
+    assert vars(plain) == {"output": "results/y", "force": False}

@@ -9,9 +9,22 @@ since the last line.
 
 from __future__ import annotations
 
+import sys
 import time
+from collections.abc import Callable
+from typing import Any
 
 from mpi4py import MPI
+
+
+def printer(comm: Any) -> Callable[..., None]:
+    """Return ``say(msg, err=False)``: print from rank 0 only (stderr for errors), flushed."""
+
+    def say(msg: str, err: bool = False) -> None:
+        if comm.rank == 0:
+            print(msg, file=sys.stderr if err else sys.stdout, flush=True)
+
+    return say
 
 
 class Cadence:
@@ -42,4 +55,4 @@ class Cadence:
         return False
 
 
-__all__ = ["Cadence"]
+__all__ = ["Cadence", "printer"]
