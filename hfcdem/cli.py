@@ -108,10 +108,10 @@ def _run(args: argparse.Namespace) -> int:
 
     from hfcdem.config.scene import load_scene
     from hfcdem.config.units import FieldError
-    from hfcdem.coupling.breakdown import FIRST_CRACK_END
     from hfcdem.io.progress import printer
     from hfcdem.mesh.tagged import MeshingError
     from hfcdem.workflows.run import OutputInUse, run_scene
+    from hfcdem.workflows.time_step_check import halved_steps
 
     comm = MPI.COMM_WORLD
 
@@ -119,56 +119,107 @@ def _run(args: argparse.Namespace) -> int:
 
     try:
         scene = load_scene(args.scene, args.resolution, overrides=_overrides(args.set))
+        halved = halved_steps(scene) if args.check_time_step else None
         summary = run_scene(scene, args.output, comm, force=args.force, say=say, resume=args.resume)
+        code = _say_run(scene.name, summary, args.output, say)
+        if halved is not None:
+            dt = scene.physics.solver.time_step if scene.physics else math.nan
+            code = max(code, _check_time_step(summary, halved, dt, args, say))
     except FieldError as exc:  # bad scene input: nothing was meshed or written
         say(f"error: {exc}", err=True)
         return 2
     except (OutputInUse, MeshingError) as exc:
         say(f"error: {exc}", err=True)
         return 3
+    return code
+
+
+def _check_time_step(
+    summary: dict[str, Any],
+    halved: dict[str, str],
+    dt: float,
+    args: argparse.Namespace,
+    say: Any,
+) -> int:
+    """Run the scene again at half its time step; say and write how far the answers move."""
+    from mpi4py import MPI
+
+    from hfcdem.config.scene import load_scene
+    from hfcdem.io.files import write_json
+    from hfcdem.workflows.run import run_scene
+    from hfcdem.workflows.time_step_check import HALF_STEP_DIR, check_words, compare_steps
+
+    comm = MPI.COMM_WORLD
+    out = Path(args.output)
+    half_dir = out / HALF_STEP_DIR
+    changed = ", ".join(f"{key} = {value}" for key, value in halved.items())
+    say(
+        f"checking the time step: the run again with {changed}, into {half_dir}/ "
+        "(at least as long as the run above)"
+    )
+    scene = load_scene(args.scene, args.resolution, overrides={**_overrides(args.set), **halved})
+    half = run_scene(
+        scene,
+        half_dir,
+        comm,
+        force=args.force,
+        say=say,
+        resume=args.resume and (half_dir / "checkpoint.json").exists(),
+    )
+    code = _say_run(scene.name, half, str(half_dir), say)
+    check = compare_steps(summary, half, dt)
+    write_json(out / "time_step_check.json", check, comm)
+    say(check_words(check))
+    return code
+
+
+def _say_run(name: str, summary: dict[str, Any], output: str, say: Any) -> int:
+    """Say a run's last line (results in ``output``); return its exit code."""
+    from hfcdem.coupling.breakdown import FIRST_CRACK_END
+
     if summary.get("kind") == "static":
         say(
-            f"{scene.name}: crack pressure {summary['crack_pressure_MPa']:g} MPa, max opening "
+            f"{name}: crack pressure {summary['crack_pressure_MPa']:g} MPa, max opening "
             f"{summary['max_crack_opening_m'] * 1e6:.3f} um, "
             f"{summary['overstressed_interfaces']} springs past their strength, "
-            f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
+            f"{summary['wall_time_s']:.1f} s; results in {output}/"
         )
         return 0
     bd = summary["breakdown_pressure_MPa"]
     if summary.get("kind") == "seepage_ramp":
         first = summary["first_crack"]
         say(
-            f"{scene.name}: first break "
+            f"{name}: first break "
             + (
                 f"{bd:.2f} MPa at {summary['breakdown_time_s']:.3g} s ({first['mode']})"
                 if bd is not None
                 else "not reached"
             )
             + f", {summary['joints_holding_pressure']:.1%} of the joints holding pressure, "
-            f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
+            f"{summary['wall_time_s']:.1f} s; results in {output}/"
         )
         return _exit_code(summary)
     if summary.get("breakdown_note") == FIRST_CRACK_END:  # injection.until = "first crack"
         say(
-            f"{scene.name}: {first_crack_words(summary)}; the run ended there "
+            f"{name}: {first_crack_words(summary)}; the run ended there "
             f'(injection.until = "first crack"), {summary["tensile_failures"]} tensile / '
             f"{summary['shear_failures']} shear, {summary['wall_time_s']:.1f} s; results in "
-            f"{args.output}/"
+            f"{output}/"
         )
         return _exit_code(summary)
     if summary.get("until") == "first crack" and summary.get("first_crack_pressure_MPa") is None:
         peak = summary.get("peak_pressure_MPa")
         say(
-            f"{scene.name}: no first crack by the end of the injection "
+            f"{name}: no first crack by the end of the injection "
             '(injection.until = "first crack" ran to injection.duration)'
             + (f"; highest pressure {peak:.2f} MPa" if peak is not None else "")
-            + f", {summary['wall_time_s']:.1f} s; results in {args.output}/"
+            + f", {summary['wall_time_s']:.1f} s; results in {output}/"
         )
         return _exit_code(summary)
     if summary.get("kind") == "seepage_pumping":
         fc = summary["first_crack_pressure_MPa"]
         say(
-            f"{scene.name}: breakdown {breakdown_words(summary)}"
+            f"{name}: breakdown {breakdown_words(summary)}"
             + (
                 f", first break {fc:.2f} MPa at {summary['first_crack_time_s']:.3g} s "
                 f"({summary['first_crack']['mode']})"
@@ -176,16 +227,16 @@ def _run(args: argparse.Namespace) -> int:
                 else ""
             )
             + f", {summary['tensile_failures']} tensile / {summary['shear_failures']} shear, "
-            f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
+            f"{summary['wall_time_s']:.1f} s; results in {output}/"
         )
         return _exit_code(summary)
     front = summary.get("fluid_front_m")
     say(
-        f"{scene.name}: breakdown {breakdown_words(summary)}"
+        f"{name}: breakdown {breakdown_words(summary)}"
         + (f", fluid front {front:.2f} m" if front is not None else "")
         + f", fracture degree {summary['fracture_degree']:.4f}, "
         f"{summary['tensile_failures']} tensile / {summary['shear_failures']} shear failures, "
-        f"{summary['wall_time_s']:.1f} s; results in {args.output}/"
+        f"{summary['wall_time_s']:.1f} s; results in {output}/"
     )
     return _exit_code(summary)
 
@@ -380,6 +431,12 @@ def _add_run(sub: Any) -> None:
         action="store_true",
         help="continue a stopped run from its checkpoint (not a seepage or static run: "
         "they keep none)",
+    )
+    run.add_argument(
+        "--check-time-step",
+        action="store_true",
+        help="then run the scene again at half its time step, into DIR/half_step, and say how "
+        "far the answers move (DIR/time_step_check.json); not for a static scene",
     )
     run.add_argument(
         "--set",
