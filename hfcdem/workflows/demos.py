@@ -6,7 +6,7 @@ besides is here, so that its cells keep to what it shows:
 
 - :func:`demo_parser`: ``-o``, and for a scene or study demo ``--resolution``,
   ``--duration``, ``--force`` (and ``--groups`` for a study), with the line
-  parsed by :func:`hfcdem.cli.parse_with_petsc_options`, so PETSc options
+  parsed by :func:`hfcdem.io.command_line.parse_with_petsc_options`, so PETSc options
   may follow;
 - :func:`run_scene_file`, :func:`run_study_file`: a scene or study file of
   the repository run with those options;
@@ -25,9 +25,9 @@ from typing import Any
 
 from mpi4py import MPI
 
-from hfcdem.cli import parse_with_petsc_options
 from hfcdem.config.scene import load_scene
 from hfcdem.config.units import FieldError
+from hfcdem.io.command_line import parse_with_petsc_options
 from hfcdem.io.files import OutputDirError
 from hfcdem.io.progress import printer
 from hfcdem.workflows.run import OutputInUse, run_scene
