@@ -48,6 +48,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import dolfinx
 import numpy as np
@@ -90,7 +91,7 @@ from hfcdem.solid.equilibrium import critical_factor
 from hfcdem.solid.forms import Loads
 from hfcdem.solid.fragments import Fragments
 from hfcdem.solid.interfaces import FacetState
-from hfcdem.solid.states import OPEN, CascadeStopped
+from hfcdem.solid.states import OPEN, CascadeStopped, InterfaceStates
 from hfcdem.solvers import ValidityLimit
 
 #: called with the time, the fluid pressure and the saturation per local facet
@@ -164,7 +165,10 @@ class PumpingResult:
     pumped volume at a step's solved state; ``joint_pressure`` and
     ``saturation`` per local facet of the solid at the end (the cracks joined
     to the cavity at its pressure, saturation 1); ``secant_balances``: cavity
-    balances the joint Newton failed and the secant did; ``validity_limit``:
+    balances the joint Newton failed and the secant did; ``unsettled_retries``:
+    steps taken again at half the step because their interface states did not
+    settle (down to the scene's step over 2^4; the run stops past that);
+    ``validity_limit``:
     the run stopped where the small-displacement solid no longer holds
     (``stopped`` says where), its history up to there standing;
     ``debris_cells``: cells of the blocks cut loose from the walls, whose faces
@@ -201,6 +205,7 @@ class PumpingResult:
     stopped: str | None = None
     validity_limit: bool = False
     secant_balances: int = 0
+    unsettled_retries: int = 0
     debris_cells: int = 0
     breakdown_drop: float | None = None
     rebalances: int = 0
@@ -369,6 +374,7 @@ class _PumpedCavity:
         self.m0 = self.volume * (1.0 + self.p / self.kw) + self.joint_content()
         self.worst = 0.0
         self.secant_balances = 0  # balances the joint Newton could not do
+        self.unsettled_retries = 0  # steps taken again, halved, for states that did not settle
         # the step's start state and the joints after its last balance: the next one's guess
         self._last_balance: tuple[np.ndarray, np.ndarray] | None = None
 
@@ -656,6 +662,45 @@ class _PumpedCavity:
 
     # ------------------------------------------------------------- stepping
 
+    def save_step(self) -> _StepStart:
+        """Return what a step changes, as it is at the step's start (:meth:`restore_step`)."""
+        solid = self.solid
+        return _StepStart(
+            states=solid.states.copy(),
+            events=len(solid.events),
+            u=solid.u.x.array.copy(),
+            u_unit=solid.u_unit.x.array.copy(),
+            cracks=self.cracks.copy(),
+            net=self.net,
+            q=self.seep.save(),
+            scalars={name: getattr(self, name) for name in _STEP_SCALARS},
+            arrays={name: getattr(self, name).copy() for name in _STEP_ARRAYS},
+        )
+
+    def restore_step(self, start: _StepStart) -> None:
+        """Go back to ``start``: interface states, displacements, cracks and the joints' fluid.
+
+        A network rebuilt in the step (new cracks joined the cavity) is built
+        again for the start's cracks, with the start's fluid.  The solid
+        refactorises for the restored states at its next solve.
+        """
+        solid = self.solid
+        solid.states.restore(start.states)
+        del solid.events[start.events :]
+        solid.u.x.array[:] = start.u
+        solid.u_unit.x.array[:] = start.u_unit
+        self.cracks = start.cracks
+        if self.net is not start.net:
+            self.seep.destroy()
+            self.facets, self.net, self.positions, self.seep = self._network(start.net, start.q)
+        else:
+            self.seep.restore(start.q)
+        for name, value in start.scalars.items():
+            setattr(self, name, value)
+        for name, value in start.arrays.items():
+            setattr(self, name, value)
+        self._last_balance = None
+
     def step(
         self, t: float, dt: float, max_iterations: int
     ) -> tuple[float, int, tuple | None, float]:
@@ -744,10 +789,9 @@ class _PumpedCavity:
                 saved = self.seep.save()
                 start_net, start_q = self.net, saved
             self.resolve(self.loads(p, self.seep.pressure), t + dt)
-        raise _Dry(
+        raise _Unsettled(
             f"interface states did not settle in {max_iterations} iterations without a break "
-            f"at t = {t + dt:.6g} s ({broken} facets broke in the step); a smaller "
-            "solver.time_step may settle them"
+            f"at t = {t + dt:.6g} s ({broken} facets broke in the step)"
         )
 
     def _wet_share(self) -> float:
@@ -803,8 +847,23 @@ class _PumpedCavity:
             stepper.limit(pumping.duration - t)
             tried, p_before, wet_before = stepper.dt, self.p, wet
             before = (solid.solves, self.rebalances, *self._factorisations(), time.perf_counter())
+            start = self.save_step()
             try:
                 dt, broken, worst, top = self.step(t, tried, max_iterations)
+            except _Unsettled as stop:
+                # contacts that keep switching at one load may settle over a shorter step
+                if tried > pumping.dt / 2**_SETTLE_HALVINGS * (1.0 + 1e-9):
+                    self.restore_step(start)
+                    stepper.retry_with(tried / 2.0)
+                    self.unsettled_retries += 1
+                    if progress is not None:
+                        progress(f"  t {t:.4g} s: {stop}; the step again at {tried / 2.0:.3g} s")
+                    continue
+                stopped = (
+                    f"{stop}, with steps halved down to {tried:.3g} s (at most "
+                    f"1/{2**_SETTLE_HALVINGS} of solver.time_step, {pumping.dt:.3g} s)"
+                )
+                break
             except _Dry as stop:
                 stopped = str(stop)
                 break
@@ -897,6 +956,7 @@ class _PumpedCavity:
             stopped=stopped,
             validity_limit=limit,
             secant_balances=self.secant_balances,
+            unsettled_retries=self.unsettled_retries,
             debris_cells=self.debris_cells,
             rebalances=self.rebalances,
             solid_solves=solid.solves - self.solves_before,
@@ -907,8 +967,34 @@ class _PumpedCavity:
         )
 
 
+#: the pumped cavity's values a step changes, restored with it (:meth:`_PumpedCavity.save_step`)
+_STEP_SCALARS = ("p", "volume", "slope", "crack_volume", "debris_cells")
+_STEP_ARRAYS = ("volume_joints", "coupling", "shut", "_friction_ref", "_unit_jumps")
+#: how many times an unsettled step is halved below the scene's step before the run stops
+_SETTLE_HALVINGS = 4
+
+
+@dataclass(frozen=True)
+class _StepStart:
+    """A pumped step's start (:meth:`_PumpedCavity.save_step`)."""
+
+    states: InterfaceStates
+    events: int
+    u: np.ndarray
+    u_unit: np.ndarray
+    cracks: np.ndarray
+    net: Network
+    q: np.ndarray
+    scalars: dict[str, Any]
+    arrays: dict[str, np.ndarray]
+
+
 class _Dry(RuntimeError):
     """A pumped step that cannot go on (the message says why)."""
+
+
+class _Unsettled(_Dry):
+    """A pumped step whose interface states kept changing with no break (shorter may settle)."""
 
 
 __all__ = [

@@ -383,6 +383,7 @@ def _run_pumped(
         "pumping_rate_m3_per_s": pumping.rate,
         "max_mass_error": result.max_mass_error,
         "secant_balances": result.secant_balances,
+        "unsettled_retries": result.unsettled_retries,
         "rebalances": result.rebalances,
         "solid_solves": result.solid_solves,
         "factorisations": result.factorisations,
