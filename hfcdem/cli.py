@@ -274,7 +274,7 @@ def breakdown_words(summary: dict[str, Any]) -> str:
     """
     bd, note = summary.get("breakdown_pressure_MPa"), summary.get("breakdown_note")
     peak = summary.get("peak_pressure_MPa")
-    if note and peak is not None:
+    if note and peak is not None and "MPa" not in note:  # a pumped run's note quotes it
         note = f"{note}; highest pressure {peak:.2f} MPa"
     if bd:
         drop = summary.get("breakdown_drop_MPa")

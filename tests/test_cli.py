@@ -98,6 +98,11 @@ def test_the_last_line_gives_the_breakdown_or_why_not_with_the_highest_pressure(
     none = {**doubted, "breakdown_pressure_MPa": None, "breakdown_note": "still rises"}
     assert breakdown_words(none) == "none (still rises; highest pressure 10.12 MPa)"
     assert breakdown_words({**none, "breakdown_note": None}) == "none"
+    # a pumped run's note quotes its highest pressure already: not said twice
+    quoted = {**doubted, "breakdown_note": "the pressure rose past it to 10.12 MPa (at 3 s)"}
+    assert breakdown_words(quoted) == (
+        "4.61 MPa at 0.75 s (the pressure rose past it to 10.12 MPa (at 3 s))"
+    )
 
 
 def test_ctrl_c_ends_with_one_line_and_exit_130(monkeypatch, capsys):
