@@ -699,3 +699,24 @@ def test_a_step_whose_states_do_not_settle_is_taken_again_at_half(plate, monkeyp
     assert run.unsettled_retries >= pumping_module._SETTLE_HALVINGS
     assert run.stopped.startswith("interface states did not settle (simulated), with steps")
     assert run.stopped.endswith("(at most 1/16 of solver.time_step, 0.4 s)")
+
+
+def test_a_balance_stalled_at_the_solves_noise_holds_to_a_millionth_of_the_step():
+    """Re-balances that stop shrinking the gap end at the noise of the volume or of the step.
+
+    The borehole pumped at 500 times its rate (coarse, 202 MPa, 330 cracks joined
+    to the cavity, debris) measured 5e-11 m^3 from pass to pass on 0.0135 m^3
+    (4e-9 of it, above the 1e-9 allowed) with nothing changing, 5e-7 of the step's
+    1e-4 m^3, and balanced again until its step did not settle.
+    """
+    from hfcdem.coupling.pumping import balanced
+
+    volume, step = 0.0135, 1e-3 * 0.1
+    assert balanced(1e-12, 0, volume, step, step)  # 1e-8 of the step: balanced at once
+    assert not balanced(5e-11, 2, volume, step, step)  # not yet stalled: balance again
+    assert balanced(5e-11, 3, volume, step, step)  # stalled at a millionth of the step
+    assert not balanced(2e-10, 3, volume, step, step)  # 2e-6 of the step: still moving
+    # a step halved four times to settle is held to the scene's step's noise
+    assert balanced(5e-11, 3, volume, step / 16, step)
+    # the shipped rate's steps (2e-7 m^3): stalled at 1e-9 of the volume as before
+    assert balanced(1e-11, 3, volume, 2e-7, 2e-7) and not balanced(2e-11, 3, volume, 2e-7, 2e-7)

@@ -12,9 +12,9 @@ writes ``DIR/time_step_check.json`` and ends with one line, e.g.::
     step, this run's own error is about twice the larger move (84.67%); a
     breakdown is in doubt (its note: time_step_check.json)
 
-(``borehole_pumping.toml`` at coarse, pumped at 500 times its rate: both runs
-stop with interface states that do not settle, and their breakdowns are
-different peaks; the first crack does not move.)
+(``borehole_pumping.toml`` at coarse, pumped at 500 times its rate: the two
+breakdowns are different peaks, the half step's in doubt; the first crack does
+not move.)
 
 The move from ``dt`` to ``dt / 2`` is measured.  The run's own error is an
 estimate: if the answer converges at first order in the step (backward Euler
