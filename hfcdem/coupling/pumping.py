@@ -130,7 +130,7 @@ _VOLUME_ROUNDOFF = 3e-13
 _STALLED_PASSES = 3
 _STALLED_ROUNDOFF = 1e-9
 
-#: ... or, stalled so, to this fraction of the step's injection: the borehole pumped at 500
+#: ... or, stalled so, to this fraction of a scene step's injection: the borehole pumped at 500
 #: times its rate (coarse, 202 MPa, 330 cracks joined to the cavity and debris) measured
 #: 4e-9 of its 0.0135 m^3 from pass to pass (5e-7 of the step's 1e-4 m^3) with nothing
 #: changing, and balanced again 197 times
@@ -712,7 +712,7 @@ class _PumpedCavity:
         del solid.events[start.events :]
         solid.u.x.array[:] = start.u
         solid.u_unit.x.array[:] = start.u_unit
-        self.cracks = start.cracks
+        self.cracks = start.cracks.copy()  # a start may be restored more than once
         if self.net is not start.net:
             self.seep.destroy()
             self.facets, self.net, self.positions, self.seep = self._network(start.net, start.q)
@@ -721,7 +721,7 @@ class _PumpedCavity:
         for name, value in start.scalars.items():
             setattr(self, name, value)
         for name, value in start.arrays.items():
-            setattr(self, name, value)
+            setattr(self, name, value.copy())
         self._last_balance = None
 
     def step(
@@ -873,7 +873,7 @@ class _PumpedCavity:
             try:
                 dt, broken, worst, top = self.step(t, tried, max_iterations)
             except _Unsettled as stop:
-                # contacts that keep switching at one load may settle over a shorter step
+                # states or a balance that did not settle may settle over a shorter step
                 if tried > pumping.dt / 2**_SETTLE_HALVINGS * (1.0 + 1e-9):
                     self.restore_step(start)
                     stepper.retry_with(tried / 2.0)
@@ -1021,6 +1021,7 @@ class _Unsettled(_Dry):
 
 __all__ = [
     "PumpingResult",
+    "balanced",
     "cavity_joint_coupling",
     "facet_openings",
     "pump_with_seepage",
