@@ -681,8 +681,8 @@ def test_a_step_whose_states_do_not_settle_is_taken_again_at_half(plate, monkeyp
     step = pumping_module._PumpedCavity.step
     fails = {"left": 1}
 
-    def unsettled(self, t, dt, max_iterations):
-        taken, broken, first, top = step(self, t, dt, max_iterations)
+    def unsettled(self, t, dt, max_iterations, start=None):
+        taken, broken, first, top = step(self, t, dt, max_iterations, start)
         if broken and fails["left"] > 0:
             fails["left"] -= 1
             raise pumping_module._Unsettled("interface states did not settle (simulated)")

@@ -725,7 +725,7 @@ class _PumpedCavity:
         self._last_balance = None
 
     def step(
-        self, t: float, dt: float, max_iterations: int
+        self, t: float, dt: float, max_iterations: int, start: _StepStart | None = None
     ) -> tuple[float, int, tuple | None, float]:
         """Advance from ``t`` by ``dt`` or less.
 
@@ -737,16 +737,19 @@ class _PumpedCavity:
         pressure drops).  ``max_iterations`` bounds the passes between two
         breaks: a cascade (breakdown, one facet per pass) may take any number,
         since each break is for good, but contacts that keep switching or a
-        balance that keeps moving without a break stop the run.
+        balance that keeps moving without a break stop the run.  ``start``: the
+        step's start from :meth:`save_step`, if taken already (its displacements and
+        joints' state serve the step's landings too).
         """
         solid = self.solid
         target = self.m0 + self.pumping.rate * (t + dt)
-        start_net, start_q = self.net, self.seep.save()
+        start = self.save_step() if start is None else start
+        start_net, start_q = self.net, start.q
         start_p, start_pj = self.p, self.seep.pressure
         start_volume, start_slope, start_joints = self.volume, self.slope, self.volume_joints
         start_friction = self._friction_ref
         start_loads = self.loads(start_p, start_pj)
-        u_start = solid.u.x.array.copy()
+        u_start = start.u
         saved, landings, broken, rounds, first, top = start_q, 0, 0, 0, None, -math.inf
         passes = 0  # since the last break
         stalled, last_gap = 0, math.inf  # re-balances in a row that did not halve the gap
@@ -871,7 +874,7 @@ class _PumpedCavity:
             before = (solid.solves, self.rebalances, *self._factorisations(), time.perf_counter())
             start = self.save_step()
             try:
-                dt, broken, worst, top = self.step(t, tried, max_iterations)
+                dt, broken, worst, top = self.step(t, tried, max_iterations, start)
             except _Unsettled as stop:
                 # states or a balance that did not settle may settle over a shorter step
                 if tried > pumping.dt / 2**_SETTLE_HALVINGS * (1.0 + 1e-9):
