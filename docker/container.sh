@@ -18,9 +18,11 @@ set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 top=$(cd "$here/.." && pwd)
 base_ref=docker.io/library/debian:trixie-slim
-# The dependency image is named by the content of the Dockerfile's base stage, so
-# editing the dependency list builds a new image and an unchanged one is reused.
-dockerfile_hash=$(sed '/^FROM base AS hfcdem/q' "$here/Dockerfile" | sha256sum | cut -c1-12)
+# The dependency image is named by the content of the Dockerfile's base stage (and
+# the MUMPS build script it runs), so editing the dependency list builds a new image
+# and an unchanged one is reused.
+dockerfile_hash=$({ sed '/^FROM base AS hfcdem/q' "$here/Dockerfile"; cat "$here/build-mumps.sh"; } \
+    | sha256sum | cut -c1-12)
 image=localhost/hfcdem-base:$dockerfile_hash
 full_image=localhost/hfcdem:latest
 

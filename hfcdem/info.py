@@ -7,10 +7,15 @@ import platform
 from mpi4py import MPI
 
 import hfcdem
+from hfcdem.solvers import mumps_orderings
 
 
 def versions(comm: MPI.Comm = MPI.COMM_WORLD) -> dict[str, object]:
-    """Return the versions of hfcdem, DOLFINx, PETSc, Gmsh, MPI and the rank count."""
+    """Return the versions of hfcdem, DOLFINx, PETSc, Gmsh, MPI and the rank count.
+
+    ``mumps_orderings`` names the external orderings MUMPS was built with: the
+    ordering changes the factor, so round-off differs between builds.
+    """
     import basix
     import dolfinx
     import gmsh
@@ -19,7 +24,8 @@ def versions(comm: MPI.Comm = MPI.COMM_WORLD) -> dict[str, object]:
     from petsc4py import PETSc
 
     petsc = ".".join(str(v) for v in PETSc.Sys.getVersion())
-    mpi_library = MPI.Get_library_version().splitlines()[0].strip()
+    # Open MPI ends the string with a NUL, which would land in summary.json
+    mpi_library = MPI.Get_library_version().replace("\x00", "").splitlines()[0].strip()
     return {
         "hfcdem": hfcdem.__version__,
         "dolfinx": dolfinx.__version__,
@@ -27,6 +33,7 @@ def versions(comm: MPI.Comm = MPI.COMM_WORLD) -> dict[str, object]:
         "ufl": ufl.__version__,
         "petsc": petsc,
         "petsc_scalar": str(PETSc.ScalarType.__name__),
+        "mumps_orderings": ", ".join(mumps_orderings()) or "none",
         "gmsh": gmsh.__version__,
         "numpy": numpy.__version__,
         "mpi": mpi_library,

@@ -1,3 +1,5 @@
+import os
+
 import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -7,6 +9,7 @@ from hfcdem.solvers import (
     SolverError,
     check_ksp,
     create_ksp,
+    mumps_orderings,
     petsc_options,
     reason_name,
     retry_factorisation,
@@ -134,3 +137,16 @@ def test_right_hand_sides_solved_together_are_those_solved_one_by_one(comm):
         assert solved[:, k] == pytest.approx(x.getArray(), rel=1e-15)
         exact = [(k + 1.0) * (i + 2.0) / (1.0 + i) for i in range(lo, hi)]
         assert solved[:, k] == pytest.approx(exact, rel=1e-15)
+
+
+def test_mumps_orderings_names_only_the_orderings_that_ran():
+    found = mumps_orderings()
+    assert set(found) <= {"metis", "pord", "scotch"}
+    assert "pord" in found  # MUMPS always carries its own PORD
+    assert found == sorted(found)
+
+
+@pytest.mark.skipif(not os.environ.get("HFCDEM_IMAGE"), reason="the image's MUMPS build only")
+def test_the_image_s_mumps_orders_with_metis_and_scotch():
+    # docker/build-mumps.sh: Debian's own libmumps links neither
+    assert mumps_orderings() == ["metis", "pord", "scotch"]
