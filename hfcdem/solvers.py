@@ -145,10 +145,11 @@ def mumps_orderings() -> list[str]:
     MUMPS quietly falls back to another ordering when asked for one it was built
     without (Debian's links only PORD), so each is asked for on a small matrix and
     kept if INFOG(7), the ordering used, says it ran.  MUMPS's automatic choice
-    prefers METIS where present: on the No. 2 solid it factorises 28-35 % faster
-    than PORD (benchmarks/README.md).  Runs on ``COMM_SELF``; not collective.
+    prefers METIS where present: the numeric factorisation of the No. 2 solid is
+    28-35 % faster with it than with PORD (benchmarks/README.md).  Runs on
+    ``COMM_SELF``; not collective.
     """
-    n = 30  # a path graph: small, yet past MUMPS's shortcut for tiny matrices
+    n = 30  # a path graph: milliseconds per ordering
     A = PETSc.Mat().createAIJ([n, n], nnz=3, comm=PETSc.COMM_SELF)
     for i in range(n):
         A.setValue(i, i, 2.0)
@@ -159,20 +160,21 @@ def mumps_orderings() -> list[str]:
     found = []
     for code, name in _EXTERNAL_ORDERINGS.items():
         ksp = PETSc.KSP().create(PETSc.COMM_SELF)
-        ksp.setOperators(A)
-        ksp.setType("preonly")
-        pc = ksp.getPC()
-        pc.setType("cholesky")
-        pc.setFactorSolverType("mumps")
-        pc.setFactorSetUpSolverType()
-        pc.getFactorMatrix().setMumpsIcntl(7, code)
-        try:
+        try:  # a PETSc without MUMPS fails here: no ordering to name
+            ksp.setOperators(A)
+            ksp.setType("preonly")
+            pc = ksp.getPC()
+            pc.setType("cholesky")
+            pc.setFactorSolverType("mumps")
+            pc.setFactorSetUpSolverType()
+            pc.getFactorMatrix().setMumpsIcntl(7, code)
             ksp.setUp()
             if int(pc.getFactorMatrix().getMumpsInfog(7)) == code:
                 found.append(name)
         except PETSc.Error:
             pass
-        ksp.destroy()
+        finally:
+            ksp.destroy()
     A.destroy()
     return sorted(found)
 
