@@ -2,12 +2,12 @@
 # Build Debian's MUMPS source (5.7.3) again with the METIS and SCOTCH orderings.
 #
 # Debian's libmumps-5.7 links neither, so MUMPS orders every factorisation with
-# PORD.  On the No. 2 solid (404,844 DG unknowns) METIS cuts the numeric
-# factorisation by 28 % on one rank and 35 % on two (benchmarks/README.md,
-# "MUMPS with METIS").  The libraries keep Debian's sonames, so PETSc loads them
+# PORD.  On the No. 2 solid (404,844 DG unknowns) MUMPS's own choice, METIS, cuts
+# the numeric factorisation by 25 % on one rank and 35 % on two (benchmarks/README.md,
+# "MUMPS with METIS and SCOTCH").  The libraries keep Debian's sonames, so PETSc loads them
 # in place of Debian's through LD_LIBRARY_PATH; nothing else changes.
 #
-#   sh docker/build-mumps.sh PREFIX     (as root, in the image's base stage)
+#   sh docker/build-mumps.sh PREFIX     (as root, in the image's mumps stage)
 set -eu
 prefix=${1:?usage: build-mumps.sh PREFIX}
 version=5.7.3

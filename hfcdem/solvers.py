@@ -145,8 +145,8 @@ def mumps_orderings() -> list[str]:
     MUMPS quietly falls back to another ordering when asked for one it was built
     without (Debian's links only PORD), so each is asked for on a small matrix and
     kept if INFOG(7), the ordering used, says it ran.  MUMPS's automatic choice
-    prefers METIS where present: the numeric factorisation of the No. 2 solid is
-    28-35 % faster with it than with PORD (benchmarks/README.md).  Runs on
+    prefers METIS where present: the numeric factorisation of the No. 2 solid takes
+    25-35 % less time with it than with PORD (benchmarks/README.md).  Runs on
     ``COMM_SELF``; not collective.
     """
     n = 30  # a path graph: milliseconds per ordering
