@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from hfcdem.io.command_line import parse_with_petsc_options, split_petsc_options
+from hfcdem.workflows.exit_codes import ExitCode
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -22,7 +23,7 @@ def _info(args: argparse.Namespace) -> int:
         width = max(len(k) for k in table)
         for key, value in table.items():
             print(f"{key:<{width}}  {value}")
-    return 0
+    return ExitCode.OK
 
 
 def _scene_files(args: argparse.Namespace) -> list[Path]:
@@ -49,24 +50,24 @@ def _mesh(args: argparse.Namespace) -> int:
     files = _scene_files(args)
     if not files:
         say("hfcdem mesh: no scene files given (name them, or use --all)", err=True)
-        return 2
+        return ExitCode.BAD_INPUT
     try:
         size = parse_quantity(args.size, "length", "--size") if args.size else None
         scenes = [load_scene(f, args.resolution, size) for f in files]
     except FieldError as exc:
         say(f"error: {exc}", err=True)
-        return 2
+        return ExitCode.BAD_INPUT
     names = [s.name for s in scenes]
     if len(set(names)) != len(names):
         say(f"error: scene names repeat: {names}", err=True)
-        return 2
+        return ExitCode.BAD_INPUT
     for scene in scenes:
         out = Path(args.output) / scene.name if len(scenes) > 1 else Path(args.output)
         try:
             report = mesh_scene(scene, out, comm, picture=not args.no_picture)
         except (MeshingError, SceneError) as exc:
             say(f"error: {exc}", err=True)
-            return 3
+            return ExitCode.OUTPUT_REFUSED
         vol = report["volumes"]["rock_total"]
         say(
             f"{scene.name}: {report['cells']} cells, {report['vertices']} vertices in "
@@ -78,7 +79,7 @@ def _mesh(args: argparse.Namespace) -> int:
             say(f"  note: {note}")
         if "picture_error" in report:
             say(f"  warning: {report['picture_error']} (use --no-picture to skip it)", err=True)
-    return 0
+    return ExitCode.OK
 
 
 def _overrides(items: list[str] | None) -> dict[str, object]:
@@ -129,10 +130,10 @@ def _run(args: argparse.Namespace) -> int:
             code = max(code, _check_time_step(summary, halved, dt, args, say))
     except FieldError as exc:  # bad scene input: nothing was meshed or written
         say(f"error: {exc}", err=True)
-        return 2
+        return ExitCode.BAD_INPUT
     except (OutputInUse, MeshingError) as exc:
         say(f"error: {exc}", err=True)
-        return 3
+        return ExitCode.OUTPUT_REFUSED
     return code
 
 
@@ -186,7 +187,7 @@ def _say_run(name: str, summary: dict[str, Any], output: str, say: Any) -> int:
             f"{summary['overstressed_interfaces']} springs past their strength, "
             f"{summary['wall_time_s']:.1f} s; results in {output}/"
         )
-        return 0
+        return ExitCode.OK
     bd = summary["breakdown_pressure_MPa"]
     if summary.get("kind") == "seepage_ramp":
         first = summary["first_crack"]
@@ -288,7 +289,9 @@ def breakdown_words(summary: dict[str, Any]) -> str:
 
 def _exit_code(summary: dict[str, Any]) -> int:
     """0 for a run that reached its end or the model's validity limit, 4 for a stopped one."""
-    return 0 if summary["stopped"] is None or summary.get("validity_limit") else 4
+    if summary["stopped"] is None or summary.get("validity_limit"):
+        return ExitCode.OK
+    return ExitCode.STOPPED
 
 
 def _study(args: argparse.Namespace) -> int:
@@ -309,7 +312,7 @@ def _study(args: argparse.Namespace) -> int:
             return _convergence(args, say)
         if not args.study:
             say("error: give a study file, or --convergence SCENE.toml", err=True)
-            return 2
+            return ExitCode.BAD_INPUT
         study = load_study(args.study, args.resolution)
         if args.values:
             study = study.with_values(_values(args.values))
@@ -318,14 +321,14 @@ def _study(args: argparse.Namespace) -> int:
         run_study(study, args.output, comm, groups=args.groups, force=args.force, say=say)
     except FieldError as exc:
         say(f"error: {exc}", err=True)
-        return 2
+        return ExitCode.BAD_INPUT
     except ValueError as exc:
         say(f"error: {exc}", err=True)
-        return 2
+        return ExitCode.BAD_INPUT
     except OutputInUse as exc:  # a case directory holds a run with other settings
         say(f"error: {exc}", err=True)
-        return 3
-    return 0
+        return ExitCode.OUTPUT_REFUSED
+    return ExitCode.OK
 
 
 def _values(text: str) -> tuple[object, ...]:
@@ -353,15 +356,15 @@ def _convergence(args: argparse.Namespace, say: Any) -> int:
 
     if args.groups != 1:
         say("error: a convergence study times its cases: run them one at a time", err=True)
-        return 2
+        return ExitCode.BAD_INPUT
     values = _values(args.resolutions or args.values) if args.resolutions or args.values else ()
     if args.convergence:
         if args.study:
             say("error: give a study file or --convergence SCENE.toml, not both", err=True)
-            return 2
+            return ExitCode.BAD_INPUT
         if not values:
             say("error: --convergence needs --resolutions or --values", err=True)
-            return 2
+            return ExitCode.BAD_INPUT
         parameter = "resolution" if args.resolutions else args.parameter
         fixed = _overrides(args.set)
         study = convergence_study(args.convergence, parameter, values, fixed, args.resolution)
@@ -372,7 +375,7 @@ def _convergence(args: argparse.Namespace, say: Any) -> int:
         if args.set:
             study = study.with_fixed(_overrides(args.set))
     run_convergence(study, args.output, MPI.COMM_WORLD, force=args.force, say=say)
-    return 0
+    return ExitCode.OK
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -515,7 +518,7 @@ def _reproduce(args: argparse.Namespace) -> int:
         )
     except ValueError as exc:
         say(f"error: {exc}", err=True)
-        return 2
+        return ExitCode.BAD_INPUT
     if args.readme:
         from hfcdem.reproduce.report import update_readme
 
@@ -528,7 +531,7 @@ def _reproduce(args: argparse.Namespace) -> int:
         error = comm.bcast(error, root=0)
         if error:
             say(f"error: {error}", err=True)
-            return 2
+            return ExitCode.BAD_INPUT
         say(f"{args.readme}: its results table is now this report's")
     limits = [r.name for r in records if r.status == "limit"]
     if limits:
@@ -536,8 +539,8 @@ def _reproduce(args: argparse.Namespace) -> int:
     failed = [r.name for r in records if r.status in ("failed", "stopped")]
     if failed:
         say(f"cases that failed or stopped: {', '.join(failed)} (see the report)", err=True)
-        return 4
-    return 0
+        return ExitCode.STOPPED
+    return ExitCode.OK
 
 
 def _minutes_arg(text: str) -> float:
@@ -596,7 +599,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parse_with_petsc_options(parser, argv)
     if not getattr(args, "func", None):
         parser.print_help(sys.stderr)
-        return 2
+        return ExitCode.BAD_INPUT
     from mpi4py import MPI
 
     from hfcdem.io.files import OutputDirError
@@ -607,10 +610,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(args.func(args))
     except OutputDirError as exc:
         say(f"error: {exc}", err=True)
-        return 3
+        return ExitCode.OUTPUT_REFUSED
     except KeyboardInterrupt:  # Ctrl-C: one line, not a solver's traceback
         say(f"interrupted: {_AFTER_INTERRUPT.get(args.command, _WHOLE)}", err=True)
-        return 130
+        return ExitCode.INTERRUPTED
 
 
 _WHOLE = "every output is written whole, so nothing written before is lost"

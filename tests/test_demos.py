@@ -285,6 +285,31 @@ def test_a_demo_whose_output_holds_another_scenes_results_keeps_them_and_exits_3
         assert capsys.readouterr().err == "error: results/x holds another scene's results\n"
 
 
+def test_a_demo_whose_geometry_cannot_be_meshed_ends_with_one_line_and_exit_3(capsys):
+    from hfcdem.mesh.tagged import MeshingError
+    from hfcdem.workflows.demos import run_demo
+
+    # before, a demo ended such a scene in a traceback on every rank; hfcdem run said one line
+    def unmeshable():
+        raise MeshingError("the model has no named cell group")
+
+    with pytest.raises(SystemExit) as ended:
+        run_demo(unmeshable)
+    assert ended.value.code == 3
+    if MPI.COMM_WORLD.rank == 0:
+        assert capsys.readouterr().err == "error: the model has no named cell group\n"
+
+
+def test_a_demo_keeps_the_traceback_of_an_unforeseen_error():
+    from hfcdem.workflows.demos import run_demo
+
+    def bug():
+        raise ZeroDivisionError("a bug")
+
+    with pytest.raises(ZeroDivisionError):
+        run_demo(bug)
+
+
 def test_a_study_demo_takes_the_scene_and_study_options():
     from hfcdem.workflows.demos import demo_parser
 

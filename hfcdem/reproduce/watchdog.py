@@ -16,8 +16,10 @@ import threading
 import time
 from collections.abc import Callable
 
+from hfcdem.workflows.exit_codes import ExitCode
+
 #: exit status of a run the watchdog ended
-EXIT_STALLED = 5
+EXIT_STALLED = ExitCode.STALLED
 
 
 def _exit(message: str) -> None:

@@ -13,7 +13,8 @@ besides is here, so that its cells keep to what it shows:
 - :func:`run_demo`: the script's ending.  Bad input (a ``--duration`` that is
   no time, a scene value out of range) ends with one line naming the field and
   exit 2, an output folder holding another scene's results with one line and
-  exit 3, as ``hfcdem run`` does, instead of a traceback on every rank.
+  exit 3, as ``hfcdem run`` does (:mod:`hfcdem.workflows.exit_codes`), instead of
+  a traceback on every rank.
 """
 
 from __future__ import annotations
@@ -26,11 +27,10 @@ from typing import Any
 from mpi4py import MPI
 
 from hfcdem.config.scene import load_scene
-from hfcdem.config.units import FieldError
 from hfcdem.io.command_line import parse_with_petsc_options
-from hfcdem.io.files import OutputDirError
 from hfcdem.io.progress import printer
-from hfcdem.workflows.run import OutputInUse, run_scene
+from hfcdem.workflows.exit_codes import exit_code_for
+from hfcdem.workflows.run import run_scene
 from hfcdem.workflows.study import load_study, run_study
 
 
@@ -109,22 +109,23 @@ def run_study_file(
 
 
 def run_demo(main: Callable[[], Any]) -> None:
-    """Run a demo's ``main``; end bad input or an output clash with one line, not a traceback.
+    """Run a demo's ``main``; end bad input or a refused output with one line, not a traceback.
 
-    Exit 2: a scene field is wrong (the line names it and what it expects).
-    Exit 3: the output folder holds another scene's results (kept; ``--force``
-    overwrites them) or cannot be written.  Every rank raises these together,
-    so every rank exits.
+    The exit codes are ``hfcdem``'s (:mod:`hfcdem.workflows.exit_codes`): 2 for a
+    scene field that is wrong (the line names it and what it expects), 3 for an
+    output folder that holds another scene's results (kept; ``--force``
+    overwrites them) or cannot be written, or a geometry that cannot be meshed.
+    Every rank raises these together, so every rank exits.
     """
     say = printer(MPI.COMM_WORLD)
     try:
         main()
-    except FieldError as exc:  # nothing was meshed or written
+    except Exception as exc:
+        code = exit_code_for(exc)
+        if code is None:  # unforeseen: the traceback is the report
+            raise
         say(f"error: {exc}", err=True)
-        raise SystemExit(2) from None
-    except (OutputInUse, OutputDirError) as exc:  # another scene's results: kept
-        say(f"error: {exc}", err=True)
-        raise SystemExit(3) from None
+        raise SystemExit(code) from None
 
 
 __all__ = ["demo_parser", "parse_demo_line", "run_demo", "run_scene_file", "run_study_file"]

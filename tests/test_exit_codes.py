@@ -1,0 +1,43 @@
+"""The exit codes ``hfcdem`` and the demos share (hfcdem.workflows.exit_codes)."""
+
+from __future__ import annotations
+
+import pytest
+
+from hfcdem.config.tables import SceneError
+from hfcdem.config.units import FieldError
+from hfcdem.io.files import OutputDirError
+from hfcdem.mesh.tagged import MeshingError
+from hfcdem.workflows.exit_codes import ExitCode, exit_code_for
+from hfcdem.workflows.run import OutputInUse
+
+
+@pytest.mark.parametrize(
+    ("error", "code"),
+    [
+        (FieldError("injection.rate", "expected a positive rate"), 2),
+        (SceneError("geometry.mesh.size", "expected a length"), 2),
+        (OutputInUse("results/x holds another scene's results"), 3),
+        (OutputDirError("cannot write results/x"), 3),
+        (MeshingError("the model has no named cell group"), 3),
+    ],
+)
+def test_each_foreseen_error_has_its_documented_code(error, code):
+    assert exit_code_for(error) == code
+
+
+def test_an_unforeseen_error_has_no_code_so_its_traceback_is_kept():
+    assert exit_code_for(RuntimeError("a bug")) is None
+    assert exit_code_for(KeyboardInterrupt()) is None
+
+
+def test_the_codes_are_the_documented_numbers():
+    # scripts branch on these numbers (README, "Exit codes"): renumbering one breaks them
+    assert {c.name: int(c) for c in ExitCode} == {
+        "OK": 0,
+        "BAD_INPUT": 2,
+        "OUTPUT_REFUSED": 3,
+        "STOPPED": 4,
+        "STALLED": 5,
+        "INTERRUPTED": 130,
+    }
