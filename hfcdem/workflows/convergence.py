@@ -64,14 +64,13 @@ at once (``--groups``): their timings would share the cores.
 from __future__ import annotations
 
 import copy
-import dataclasses
 import json
 import math
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 from mpi4py import MPI
@@ -84,7 +83,7 @@ from hfcdem.config.tables import SceneError
 from hfcdem.config.units import FieldError
 from hfcdem.io.files import atomic_path, prepare_output_dir, write_atomic, write_json
 from hfcdem.workflows.richardson import SPREAD, Extrapolation, extrapolate
-from hfcdem.workflows.study import case_rows, claim_cases, numeric, run_cases
+from hfcdem.workflows.study import SceneSweep, case_rows, claim_cases, numeric, run_cases
 
 # swept key -> (what the error is extrapolated in, axis label, axis unit per SI unit);
 # None: names only
@@ -131,16 +130,8 @@ def characteristic_size(scene: Scene) -> float:
 
 
 @dataclass(frozen=True)
-class ConvergenceStudy:
+class ConvergenceStudy(SceneSweep):
     """A validated convergence study: the base scene, the swept key and its values."""
-
-    name: str
-    scene_path: Path
-    base: Mapping[str, Any]
-    parameter: str
-    values: tuple[Any, ...]
-    fixed: Mapping[str, Any]
-    resolution: str | None = None
 
     def __post_init__(self) -> None:
         if self.parameter not in MEASURES:
@@ -159,13 +150,18 @@ class ConvergenceStudy:
         entry = MEASURES[self.parameter]
         return entry[0] if entry else None
 
-    def with_values(self, values: tuple[Any, ...]) -> ConvergenceStudy:
-        """Return the study with other values (validated)."""
-        return _validated(dataclasses.replace(self, values=tuple(values)))
-
-    def with_fixed(self, extra: Mapping[str, Any]) -> ConvergenceStudy:
-        """Return the study with more fields fixed in every case (validated)."""
-        return _validated(dataclasses.replace(self, fixed={**self.fixed, **extra}))
+    def validated(self) -> Self:
+        """Return the study once every case's scene is checked and the measures differ."""
+        measures = [self.case_measure(k) for k in range(len(self.values))]  # parses each scene
+        known = [m for m in measures if m is not None]
+        if len(set(known)) != len(known):
+            raise SceneError(
+                "sweep.values",
+                f"cases share a {self.measure}: "
+                f"{dict(zip(self.values, measures, strict=True))} "
+                "(e.g. a size below the circle cap pi d / circle_elements)",
+            )
+        return self
 
     def case_scene(self, k: int) -> Scene:
         """Return the validated scene of case ``k``; errors name the case and the key."""
@@ -176,18 +172,15 @@ class ConvergenceStudy:
             resolution = str(value)
         apply_overrides(doc, self.fixed, resolution)
         try:
-            if self.parameter == "resolution":
-                resolution = str(value)
-            elif self.parameter == "geometry.mesh.size":
+            if self.parameter == "geometry.mesh.size":
                 size = numeric(value)
                 if size is None:
                     raise SceneError("", f"expected a length such as '10 mm', got {value!r}")
-            else:
+            elif self.parameter != "resolution":
                 _set(doc, self.parameter, value)
             return parse_scene(doc, self.name, resolution, size, str(self.scene_path))
         except FieldError as exc:
-            where = f"case {k} ({self.parameter} = {value!r})"
-            raise SceneError(f"{where}: {exc.path}" if exc.path else where, exc.reason) from None
+            raise self.case_error(k, exc) from None
 
     def case_measure(self, k: int) -> float | None:
         """Return the measure of case ``k`` (h in m, 1/alpha, dt in s), or None."""
@@ -199,19 +192,6 @@ class ConvergenceStudy:
         if self.measure is not None:
             return numeric(self.values[k])
         return None
-
-
-def _validated(study: ConvergenceStudy) -> ConvergenceStudy:
-    """Check every case's scene and that the measures differ (before any meshing)."""
-    measures = [study.case_measure(k) for k in range(len(study.values))]
-    known = [m for m in measures if m is not None]
-    if len(set(known)) != len(known):
-        raise SceneError(
-            "sweep.values",
-            f"cases share a {study.measure}: {dict(zip(study.values, measures, strict=True))} "
-            "(e.g. a size below the circle cap pi d / circle_elements)",
-        )
-    return study
 
 
 def load_convergence(path: str | Path, resolution: str | None = None) -> ConvergenceStudy:
@@ -264,7 +244,7 @@ def convergence_study(
         fixed=dict(fixed or {}),
         resolution=resolution,
     )
-    return _validated(study)
+    return study.validated()
 
 
 def study_kind(path: str | Path) -> str:

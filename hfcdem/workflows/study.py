@@ -37,7 +37,7 @@ import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Protocol, Self
 
 from mpi4py import MPI
 
@@ -49,8 +49,12 @@ from hfcdem.io.files import prepare_output_dir
 
 
 @dataclass(frozen=True)
-class Study:
-    """A validated study: the base scene document, the swept key and its values."""
+class SceneSweep:
+    """What every study holds: the base scene document, the swept key, its values, the fixed.
+
+    A kind of study says how case ``k``'s scene is made (:meth:`case_scene`) and
+    what else it must check before anything runs (:meth:`validated`).
+    """
 
     name: str
     scene_path: Path
@@ -59,29 +63,49 @@ class Study:
     values: tuple[Any, ...]
     fixed: Mapping[str, Any]
     resolution: str | None = None
+
+    def case_scene(self, k: int) -> Scene:
+        """Return the validated scene of case ``k``; errors name the case and the key."""
+        raise NotImplementedError
+
+    def validated(self) -> Self:
+        """Return the study once every case's scene is checked (before any meshing)."""
+        if not self.values:
+            raise SceneError("sweep.values", "expected a non-empty list")
+        for k in range(len(self.values)):
+            self.case_scene(k)
+        return self
+
+    def with_values(self, values: tuple[Any, ...]) -> Self:
+        """Return the study with other swept values (validated)."""
+        return dataclasses.replace(self, values=tuple(values)).validated()
+
+    def with_fixed(self, extra: Mapping[str, Any]) -> Self:
+        """Return the study with more fields fixed in every case (validated)."""
+        return dataclasses.replace(self, fixed={**self.fixed, **extra}).validated()
+
+    def case_error(self, k: int, exc: FieldError) -> SceneError:
+        """Return ``exc`` of case ``k``'s scene as an error that names the case first."""
+        where = f"case {k} ({self.parameter} = {self.values[k]!r})"
+        return SceneError(f"{where}: {exc.path}" if exc.path else where, exc.reason)
+
+
+@dataclass(frozen=True)
+class Study(SceneSweep):
+    """A validated parameter study; ``together`` moves more keys with the swept one."""
+
     together: Mapping[str, tuple[Any, ...]] = dataclasses.field(default_factory=dict)
 
-    def with_values(self, values: tuple[Any, ...]) -> Study:
-        """Return the study with other swept values (validated)."""
-        if not values:
-            raise SceneError("sweep.values", "expected a non-empty list")
-        if self.together and len(values) != len(self.values):
+    def validated(self) -> Self:
+        """Return the study once every case's scene is checked; keys moved together must fit."""
+        moved = {len(v) for v in self.together.values()}
+        if self.values and moved and moved != {len(self.values)}:
             raise SceneError(
                 "sweep.values",
-                f"{len(values)} values, but sweep.with moves "
-                f"{', '.join(self.together)} with {len(self.values)}",
+                f"{len(self.values)} values, but sweep.with moves "
+                f"{', '.join(self.together)} with {max(moved)}",
             )
-        study = dataclasses.replace(self, values=tuple(values))
-        for k in range(len(study.values)):
-            study.case_scene(k)
-        return study
-
-    def with_fixed(self, extra: Mapping[str, Any]) -> Study:
-        """Return the study with more fields fixed in every case (validated)."""
-        study = dataclasses.replace(self, fixed={**self.fixed, **extra})
-        for k in range(len(study.values)):
-            study.case_scene(k)
-        return study
+        return super().validated()
 
     def case_document(self, k: int) -> dict[str, Any]:
         """Return the scene document of case ``k`` (overrides applied)."""
@@ -107,8 +131,7 @@ class Study:
                 str(self.scene_path),
             )
         except FieldError as exc:
-            where = f"case {k} ({self.parameter} = {self.values[k]!r})"
-            raise SceneError(f"{where}: {exc.path}" if exc.path else where, exc.reason) from None
+            raise self.case_error(k, exc) from None
 
 
 def load_study(path: str | Path, resolution: str | None = None) -> Study:
@@ -172,9 +195,7 @@ def load_study(path: str | Path, resolution: str | None = None) -> Study:
         resolution=resolution or data.get("resolution"),
         together={key: tuple(v) for key, v in together.items()},
     )
-    for k in range(len(values)):
-        study.case_scene(k)  # bad input stops here, before any meshing
-    return study
+    return study.validated()  # bad input stops here, before any meshing
 
 
 def breakdown_text(summary: Mapping[str, Any]) -> str:
@@ -518,6 +539,7 @@ def _label_axes(axes: Any, study: Study, rows: list[dict[str, Any]], xs: list, c
 __all__ = [
     "STATIC_COLUMNS",
     "CaseSource",
+    "SceneSweep",
     "Study",
     "breakdown_text",
     "case_directory",
