@@ -28,9 +28,10 @@ def test_a_row_written_before_the_held_shut_column_reads_back_as_none_held():
     assert StepRecord.from_row(row).held_shut == 0
 
 
-def test_the_progress_line_estimates_the_time_left():
-    line = _record(time=2.0, wall=10.0).progress_line(t_end=6.0)
+def test_the_progress_line_says_the_time_left():
+    line = _record(time=2.0, wall=10.0).progress_line(20.0)
     assert "p   12.5000 MPa" in line and "broken     4" in line
-    assert "eta    20.0 s" in line  # 10 s for 2 s simulated: 20 s for the 4 s left
-    assert "eta     nan s" in _record(time=0.0).progress_line(6.0)
+    assert line.endswith("wall    10.0 s  eta   20 s")
+    assert _record().progress_line(7200.0).endswith("eta  2.0 h")
+    assert _record(time=0.0).progress_line(math.nan).endswith("eta      ?")
     assert issubclass(SimulationStopped, RuntimeError) and math.isfinite(_record().dt)

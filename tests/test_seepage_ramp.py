@@ -263,7 +263,9 @@ def test_a_pumped_run_stopped_from_outside_keeps_its_history(shared_tmp_path):
     assert 1 < len(rows) == len(costs) < 21
     times = [float(r.split(",")[0]) for r in rows[1:]]
     assert times == sorted(times) and f"t {times[-1]:.4g} s," in said[-1]
-    assert re.search(r", wall \d+ s, about \d+ s left at this pace$", said[-1])
+    assert re.search(
+        r", wall \d+ s, about (\d+ s|\d+ min|\d+\.\d h) left at the recent pace$", said[-1]
+    )
     assert [float(r.split(",")[0]) for r in costs[1:]] == times
     assert not (out / "summary.json").exists()
 

@@ -67,6 +67,7 @@ from hfcdem.coupling.stepping import StepController
 from hfcdem.flow.balance import GroupBalance, VoidVolumes, gravity_drive, relative_permeability
 from hfcdem.flow.newton import solve_groups
 from hfcdem.io.files import write_csv
+from hfcdem.io.progress import TimeLeft
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.forms import Loads
 from hfcdem.solid.fragments import Fragments
@@ -698,7 +699,7 @@ class HydraulicFracture:
             fracture_degree=self.solid.fracture_degree(),
             newton_iterations=its,
             rebuilds=self.rebuilds,
-            wall_time=time.perf_counter() - self.wall_start,
+            wall_time=self.wall_time(),
             held_shut=self.solid.held_shut.count,
         )
 
@@ -731,12 +732,18 @@ class HydraulicFracture:
         self.initial_failures = sum(self.solid.broken_counts().values()) - before
         return self.initial_failures
 
+    def wall_time(self) -> float:
+        """Return the wall time since the fracture was built (s): the clock of its records."""
+        return time.perf_counter() - self.wall_start
+
     def run(self, t_end: float, max_steps: int = 100_000) -> list[StepRecord]:
         """Step to ``t_end`` (s); progress lines go to ``progress`` if set."""
         if not (math.isfinite(t_end) and t_end > self.t):
             raise ValueError(
                 f"t_end must be a time in s after the current {self.t} s, got {t_end!r}"
             )
+        pace = TimeLeft(t_end, self.t)
+        begun = self.wall_time()  # a run goes on from a settled state
         for count in range(max_steps + 1):
             if self.t >= t_end * (1.0 - 1e-12):
                 break
@@ -747,8 +754,9 @@ class HydraulicFracture:
                 )
             self.dt = min(self.dt, t_end - self.t)
             rec = self.step()
+            pace.add(self.t, rec.wall_time - begun)
             if self.progress is not None:
-                self.progress(rec.progress_line(t_end))
+                self.progress(rec.progress_line(pace.seconds()))
         return self.history
 
     # ------------------------------------------------------------- results

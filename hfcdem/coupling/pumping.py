@@ -85,7 +85,7 @@ from hfcdem.flow.seepage import (
     network_positions,
     network_values,
 )
-from hfcdem.io.progress import Cadence
+from hfcdem.io.progress import Cadence, TimeLeft
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.equilibrium import critical_factor
 from hfcdem.solid.forms import Loads
@@ -337,13 +337,6 @@ def balanced(gap: float, stalled: int, volume: float, injected: float, base: flo
         return True
     noise = max(_STALLED_ROUNDOFF * held, _STALLED_SHARE * base)
     return stalled >= _STALLED_PASSES and gap <= noise
-
-
-def _pace(started: float, t: float, pumping: CavityPumping) -> str:
-    """Wall time since ``started`` and the time left were the run to go on at its pace."""
-    wall = time.perf_counter() - started
-    left = wall / t * max(pumping.duration - t, 0.0)
-    return f"wall {wall:.0f} s, about {left:.0f} s left at this pace"
 
 
 class _PumpedCavity:
@@ -868,6 +861,7 @@ class _PumpedCavity:
         rate: float | None = None  # the cavity pressure's rate over the last step (Pa/s)
         wet = self._wet_share()
         started = time.perf_counter()
+        pace = TimeLeft(pumping.duration, t)
         while t < pumping.duration * (1.0 - 1e-12):
             stepper.limit(pumping.duration - t)
             tried, p_before, wet_before = stepper.dt, self.p, wet
@@ -896,6 +890,7 @@ class _PumpedCavity:
                 stopped, limit = str(stop), True
                 break
             t, n = t + dt, n + 1
+            pace.add(t, time.perf_counter() - started)
             change, last_rate = self.p - p_before, rate
             rate, wet = change / dt, self._wet_share()
             if broken or dt < tried:
@@ -949,7 +944,7 @@ class _PumpedCavity:
                 progress(
                     f"  t {t:.4g} s, cavity {self.p / 1e6:.4g} MPa, {counts['tensile']} tensile "
                     f"{counts['shear']} shear, joints holding pressure {wet:.1%}, "
-                    f"cracks joined to the cavity {crack:.3g} m^3, {_pace(started, t, pumping)}"
+                    f"cracks joined to the cavity {crack:.3g} m^3, {pace.words()}"
                 )
         counts = solid.broken_counts()
         pj, sat = self.fields()

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, fields
 from typing import Any
 
 # the coupled run stops with the same exception as the solid's cascade (one base)
+from hfcdem.io.progress import duration_words
 from hfcdem.solvers import SimulationStopped
 
 
@@ -39,14 +39,12 @@ class StepRecord:
         """Return the record as a flat dict (the columns of history.csv)."""
         return dict(self.__dict__)
 
-    def progress_line(self, t_end: float) -> str:
-        """One line of progress, with the wall time left until ``t_end`` at this pace."""
-        elapsed = self.wall_time
-        eta = elapsed / self.time * (t_end - self.time) if self.time > 0 else math.nan
+    def progress_line(self, left_s: float) -> str:
+        """One line of progress, with ``left_s``, the wall time left (s; nan: not known)."""
         return (
             f"t {self.time:9.4g} s  p {self.injection_pressure / 1e6:9.4f} MPa  "
             f"broken {self.tensile + self.shear:5d}  wet {self.wet_facets:5d}  "
-            f"dt {self.dt:8.3g} s  wall {elapsed:7.1f} s  eta {eta:7.1f} s"
+            f"dt {self.dt:8.3g} s  wall {self.wall_time:7.1f} s  eta {duration_words(left_s):>6}"
         )
 
     @classmethod

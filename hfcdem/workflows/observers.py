@@ -22,6 +22,7 @@ from mpi4py import MPI
 from hfcdem.coupling.hydrofrac import HydraulicFracture, StepRecord
 from hfcdem.io.files import write_json
 from hfcdem.io.history import HistoryFile
+from hfcdem.io.progress import TimeLeft
 from hfcdem.io.series import FieldSeries, output_times
 
 
@@ -43,16 +44,18 @@ class ProgressLine(StepObserver):
 
     def __init__(self, say: Callable[[str], None], t_end: float) -> None:
         self.say, self.t_end = say, t_end
+        self.pace = TimeLeft(t_end)
+        self.begun = 0.0
+
+    def start(self, frac: HydraulicFracture) -> None:
+        """Time this session from here (a resumed run, or one that settled first)."""
+        self.pace = TimeLeft(self.t_end, frac.t)
+        self.begun = frac.wall_time()
 
     def step(self, frac: HydraulicFracture, rec: StepRecord) -> None:
         """Print the step's line."""
-        left = self.t_end - rec.time
-        eta = rec.wall_time / rec.time * left if rec.time > 0 else math.nan
-        self.say(
-            f"t {rec.time:8.4g} s  p {rec.injection_pressure / 1e6:8.3f} MPa  "
-            f"broken {rec.tensile + rec.shear:5d}  dt {rec.dt:8.3g} s  "
-            f"wall {rec.wall_time:6.1f} s  eta {eta:6.1f} s"
-        )
+        self.pace.add(rec.time, rec.wall_time - self.begun)
+        self.say(rec.progress_line(self.pace.seconds()))
 
 
 class HistoryWriter(StepObserver):
