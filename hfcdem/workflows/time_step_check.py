@@ -19,8 +19,11 @@ not move.)
 The move from ``dt`` to ``dt / 2`` is measured.  The run's own error is an
 estimate: if the answer converges at first order in the step (backward Euler
 in time, and breaks found at the end of a step), Richardson extrapolation puts
-the error of the run at ``dt`` at twice the move.  A convergence study over
-three steps measures the order instead::
+the error of the run at ``dt`` at twice the move, and that of the run at
+``dt / 2`` at the move itself.  The two conventions agree: a convergence study
+(:mod:`hfcdem.workflows.richardson`) states the error of its *finest* case, and
+with two cases its fallback is that same move; here the run asked for is the
+coarser one.  A convergence study over three steps measures the order instead::
 
     hfcdem study --convergence SCENE.toml --parameter solver.time_step \
         --values "0.1 s,0.05 s,0.025 s" -o DIR
