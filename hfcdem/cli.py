@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from hfcdem.io.command_line import parse_with_petsc_options, split_petsc_options
-from hfcdem.workflows.exit_codes import ExitCode
+from hfcdem.workflows.exit_codes import ExitCode, exit_codes_text
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -383,6 +383,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="hfcdem",
         description="Hydraulic fracture initiation from perforation tunnels (CDEM on DOLFINx).",
+        epilog=exit_codes_text(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     info = sub.add_parser("info", help="print the versions of hfcdem, DOLFINx, PETSc, Gmsh, MPI")

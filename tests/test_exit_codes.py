@@ -8,7 +8,7 @@ from hfcdem.config.tables import SceneError
 from hfcdem.config.units import FieldError
 from hfcdem.io.files import OutputDirError
 from hfcdem.mesh.tagged import MeshingError
-from hfcdem.workflows.exit_codes import ExitCode, exit_code_for
+from hfcdem.workflows.exit_codes import ExitCode, exit_code_for, exit_codes_text
 from hfcdem.workflows.run import OutputInUse
 
 
@@ -41,3 +41,14 @@ def test_the_codes_are_the_documented_numbers():
         "STALLED": 5,
         "INTERRUPTED": 130,
     }
+
+
+def test_hfcdem_help_ends_with_every_code():
+    from hfcdem.cli import build_parser
+
+    text = build_parser().format_help()
+    assert text.rstrip().endswith(exit_codes_text().rstrip())
+    assert "    2  bad input (the line names the field)" in text
+    assert [line.split()[0] for line in exit_codes_text().splitlines()[1:]] == [
+        str(int(c)) for c in ExitCode
+    ]

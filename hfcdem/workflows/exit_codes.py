@@ -34,6 +34,22 @@ class ExitCode(IntEnum):
     INTERRUPTED = 130
 
 
+#: a few words per code, for ``hfcdem --help``
+MEANINGS = {
+    ExitCode.OK: "done (the run's end or the model's validity limit)",
+    ExitCode.BAD_INPUT: "bad input (the line names the field)",
+    ExitCode.OUTPUT_REFUSED: "output refused (another scene's results, unwritable) or unmeshable",
+    ExitCode.STOPPED: "a run or a report's case stopped before its end",
+    ExitCode.STALLED: "the report's watchdog heard no progress",
+    ExitCode.INTERRUPTED: "interrupted (Ctrl-C)",
+}
+
+
+def exit_codes_text() -> str:
+    """Return the table of exit codes as ``hfcdem --help`` ends with it."""
+    return "exit codes:\n" + "\n".join(f"  {int(c):>3}  {MEANINGS[c]}" for c in ExitCode)
+
+
 def exit_code_for(exc: BaseException) -> ExitCode | None:
     """Return the exit code that ends a command on ``exc``, or None for an unforeseen error.
 
@@ -53,4 +69,4 @@ def exit_code_for(exc: BaseException) -> ExitCode | None:
     return None
 
 
-__all__ = ["ExitCode", "exit_code_for"]
+__all__ = ["MEANINGS", "ExitCode", "exit_code_for", "exit_codes_text"]
