@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from hfcdem.io.command_line import parse_with_petsc_options, split_petsc_options
-from hfcdem.workflows.exit_codes import ExitCode, exit_codes_text
+from hfcdem.workflows.exit_codes import ExitCode, exit_codes_text, run_exit_code
 
 
 def _info(args: argparse.Namespace) -> int:
@@ -201,7 +201,7 @@ def _say_run(name: str, summary: dict[str, Any], output: str, say: Any) -> int:
             + f", {summary['joints_holding_pressure']:.1%} of the joints holding pressure, "
             f"{summary['wall_time_s']:.1f} s; results in {output}/"
         )
-        return _exit_code(summary)
+        return run_exit_code(summary)
     if summary.get("breakdown_note") == FIRST_CRACK_END:  # injection.until = "first crack"
         say(
             f"{name}: {first_crack_words(summary)}; the run ended there "
@@ -209,7 +209,7 @@ def _say_run(name: str, summary: dict[str, Any], output: str, say: Any) -> int:
             f"{summary['shear_failures']} shear, {summary['wall_time_s']:.1f} s; results in "
             f"{output}/"
         )
-        return _exit_code(summary)
+        return run_exit_code(summary)
     if summary.get("until") == "first crack" and summary.get("first_crack_pressure_MPa") is None:
         peak = summary.get("peak_pressure_MPa")
         say(
@@ -218,7 +218,7 @@ def _say_run(name: str, summary: dict[str, Any], output: str, say: Any) -> int:
             + (f"; highest pressure {peak:.2f} MPa" if peak is not None else "")
             + f", {summary['wall_time_s']:.1f} s; results in {output}/"
         )
-        return _exit_code(summary)
+        return run_exit_code(summary)
     if summary.get("kind") == "seepage_pumping":
         fc = summary["first_crack_pressure_MPa"]
         say(
@@ -232,7 +232,7 @@ def _say_run(name: str, summary: dict[str, Any], output: str, say: Any) -> int:
             + f", {summary['tensile_failures']} tensile / {summary['shear_failures']} shear, "
             f"{summary['wall_time_s']:.1f} s; results in {output}/"
         )
-        return _exit_code(summary)
+        return run_exit_code(summary)
     front = summary.get("fluid_front_m")
     say(
         f"{name}: breakdown {breakdown_words(summary)}"
@@ -241,7 +241,7 @@ def _say_run(name: str, summary: dict[str, Any], output: str, say: Any) -> int:
         f"{summary['tensile_failures']} tensile / {summary['shear_failures']} shear failures, "
         f"{summary['wall_time_s']:.1f} s; results in {output}/"
     )
-    return _exit_code(summary)
+    return run_exit_code(summary)
 
 
 def first_crack_pressure_words(summary: dict[str, Any]) -> str:
@@ -285,13 +285,6 @@ def breakdown_words(summary: dict[str, Any]) -> str:
             f" ({'; '.join(said)})" if said else ""
         )
     return f"none ({note})" if note else "none"
-
-
-def _exit_code(summary: dict[str, Any]) -> int:
-    """0 for a run that reached its end or the model's validity limit, 4 for a stopped one."""
-    if summary["stopped"] is None or summary.get("validity_limit"):
-        return ExitCode.OK
-    return ExitCode.STOPPED
 
 
 def _study(args: argparse.Namespace) -> int:

@@ -310,6 +310,19 @@ def test_a_demo_keeps_the_traceback_of_an_unforeseen_error():
         run_demo(bug)
 
 
+def test_a_demo_whose_run_stopped_ends_as_hfcdem_run_does():
+    from hfcdem.workflows.demos import run_demo
+
+    # before, a demo ended 0 where hfcdem run, on the same stop, ended 4
+    with pytest.raises(SystemExit) as ended:
+        run_demo(lambda: {"stopped": "the cascade did not settle", "breakdown_pressure_MPa": 9})
+    assert ended.value.code == 4
+    run_demo(lambda: {"stopped": "a block came loose", "validity_limit": True})  # 0: returns
+    run_demo(lambda: {"stopped": None})
+    run_demo(lambda: [{"stopped": "a case's solver gave up"}])  # a study's rows, as hfcdem study
+    run_demo(lambda: {"centre_uy_m": 1e-5})  # a demo that shows no run
+
+
 def test_a_study_demo_takes_the_scene_and_study_options():
     from hfcdem.workflows.demos import demo_parser
 

@@ -8,7 +8,7 @@ from hfcdem.config.tables import SceneError
 from hfcdem.config.units import FieldError
 from hfcdem.io.files import OutputDirError
 from hfcdem.mesh.tagged import MeshingError
-from hfcdem.workflows.exit_codes import ExitCode, exit_code_for, exit_codes_text
+from hfcdem.workflows.exit_codes import ExitCode, exit_code_for, exit_codes_text, run_exit_code
 from hfcdem.workflows.run import OutputInUse
 
 
@@ -52,3 +52,9 @@ def test_hfcdem_help_ends_with_every_code():
     assert [line.split()[0] for line in exit_codes_text().splitlines()[1:]] == [
         str(int(c)) for c in ExitCode
     ]
+
+
+def test_a_run_ends_ok_at_its_end_or_the_validity_limit_else_stopped():
+    assert run_exit_code({"stopped": None}) == 0
+    assert run_exit_code({"stopped": "a block came loose", "validity_limit": True}) == 0
+    assert run_exit_code({"stopped": "did not settle in 200 iterations"}) == 4

@@ -20,7 +20,7 @@ besides is here, so that its cells keep to what it shows:
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -29,7 +29,7 @@ from mpi4py import MPI
 from hfcdem.config.scene import load_scene
 from hfcdem.io.command_line import parse_with_petsc_options
 from hfcdem.io.progress import printer
-from hfcdem.workflows.exit_codes import exit_code_for
+from hfcdem.workflows.exit_codes import exit_code_for, run_exit_code
 from hfcdem.workflows.run import run_scene
 from hfcdem.workflows.study import load_study, run_study
 
@@ -114,18 +114,23 @@ def run_demo(main: Callable[[], Any]) -> None:
     The exit codes are ``hfcdem``'s (:mod:`hfcdem.workflows.exit_codes`): 2 for a
     scene field that is wrong (the line names it and what it expects), 3 for an
     output folder that holds another scene's results (kept; ``--force``
-    overwrites them) or cannot be written, or a geometry that cannot be meshed.
-    Every rank raises these together, so every rank exits.
+    overwrites them) or cannot be written, or a geometry that cannot be meshed;
+    4 when ``main`` returns the summary of a run that stopped before its end.
+    Every rank raises or returns these together, so every rank exits.
     """
     say = printer(MPI.COMM_WORLD)
     try:
-        main()
+        result = main()
     except Exception as exc:
         code = exit_code_for(exc)
         if code is None:  # unforeseen: the traceback is the report
             raise
         say(f"error: {exc}", err=True)
         raise SystemExit(code) from None
+    # a demo that shows one run ends as hfcdem run does; a study's rows end with 0, as
+    # hfcdem study does (its stopped cases are in its table)
+    if isinstance(result, Mapping) and "stopped" in result and run_exit_code(result):
+        raise SystemExit(run_exit_code(result))
 
 
 __all__ = ["demo_parser", "parse_demo_line", "run_demo", "run_scene_file", "run_study_file"]

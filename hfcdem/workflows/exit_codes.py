@@ -16,11 +16,16 @@ code  name                 meaning
 5     ``STALLED``          the report's watchdog: no progress line for its minutes
 130   ``INTERRUPTED``      Ctrl-C; every output is written whole
 ====  ===================  ==========================================================
+
+The demo scripts (:func:`hfcdem.workflows.demos.run_demo`) end as ``hfcdem run``
+does: 0, 2, 3, or 4 when the run they show stopped.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from enum import IntEnum
+from typing import Any
 
 
 class ExitCode(IntEnum):
@@ -50,6 +55,16 @@ def exit_codes_text() -> str:
     return "exit codes:\n" + "\n".join(f"  {int(c):>3}  {MEANINGS[c]}" for c in ExitCode)
 
 
+def run_exit_code(summary: Mapping[str, Any]) -> ExitCode:
+    """Return how a run with ``summary`` ends: OK at its end or the validity limit, else STOPPED.
+
+    ``summary`` is a run's ``summary.json`` (``stopped``: None, or why it stopped).
+    """
+    if summary.get("stopped") is None or summary.get("validity_limit"):
+        return ExitCode.OK
+    return ExitCode.STOPPED
+
+
 def exit_code_for(exc: BaseException) -> ExitCode | None:
     """Return the exit code that ends a command on ``exc``, or None for an unforeseen error.
 
@@ -69,4 +84,4 @@ def exit_code_for(exc: BaseException) -> ExitCode | None:
     return None
 
 
-__all__ = ["MEANINGS", "ExitCode", "exit_code_for", "exit_codes_text"]
+__all__ = ["MEANINGS", "ExitCode", "exit_code_for", "exit_codes_text", "run_exit_code"]
