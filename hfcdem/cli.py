@@ -311,7 +311,7 @@ def _study(args: argparse.Namespace) -> int:
             study = study.with_values(_values(args.values))
         if args.set:
             study = study.with_fixed(_overrides(args.set))
-        run_study(study, args.output, comm, groups=args.groups, force=args.force, say=say)
+        rows = run_study(study, args.output, comm, groups=args.groups, force=args.force, say=say)
     except FieldError as exc:
         say(f"error: {exc}", err=True)
         return ExitCode.BAD_INPUT
@@ -321,6 +321,10 @@ def _study(args: argparse.Namespace) -> int:
     except OutputInUse as exc:  # a case directory holds a run with other settings
         say(f"error: {exc}", err=True)
         return ExitCode.OUTPUT_REFUSED
+    stopped = [str(r["value"]) for r in rows if run_exit_code(r)]
+    if stopped:  # the table is written; a script should still hear of it
+        say(f"cases that stopped before their end: {', '.join(stopped)} (results.csv)", err=True)
+        return ExitCode.STOPPED
     return ExitCode.OK
 
 

@@ -131,3 +131,22 @@ def test_a_first_crack_no_step_landed_on_is_said_as_a_range():
     assert said(61.644, 61.6441) == "61.64 MPa"
     assert said(62.1, 61.9) == "62.10 MPa"  # the pressure fell before the crack
     assert said(8.8, None) == "8.80 MPa"  # a summary from before the bound
+
+
+def test_a_study_whose_case_stopped_ends_with_4_after_its_table(monkeypatch, capsys):
+    from mpi4py import MPI
+
+    import hfcdem.workflows.study as study_module
+
+    rows = [
+        {"case": 0, "value": "1e-3 m3/s", "stopped": None},
+        {"case": 1, "value": "2e-3 m3/s", "stopped": "did not settle in 200 iterations"},
+        {"case": 2, "value": "4e-3 m3/s", "stopped": "a block came loose", "validity_limit": True},
+    ]
+    monkeypatch.setattr(study_module, "run_study", lambda *args, **kwargs: rows)
+    assert main(["study", "studies/kgd_rate.toml", "-o", "unused"]) == 4
+    if MPI.COMM_WORLD.rank == 0:
+        err = capsys.readouterr().err
+        assert err == "cases that stopped before their end: 2e-3 m3/s (results.csv)\n"
+    monkeypatch.setattr(study_module, "run_study", lambda *args, **kwargs: rows[::2])
+    assert main(["study", "studies/kgd_rate.toml", "-o", "unused"]) == 0

@@ -314,12 +314,15 @@ def test_a_demo_whose_run_stopped_ends_as_hfcdem_run_does():
     from hfcdem.workflows.demos import run_demo
 
     # before, a demo ended 0 where hfcdem run, on the same stop, ended 4
-    with pytest.raises(SystemExit) as ended:
-        run_demo(lambda: {"stopped": "the cascade did not settle", "breakdown_pressure_MPa": 9})
-    assert ended.value.code == 4
+    for stopped in (
+        {"stopped": "the cascade did not settle", "breakdown_pressure_MPa": 9},
+        [{"stopped": None}, {"stopped": "a case's solver gave up"}],  # a study's rows
+    ):
+        with pytest.raises(SystemExit) as ended:
+            run_demo(lambda stopped=stopped: stopped)
+        assert ended.value.code == 4
     run_demo(lambda: {"stopped": "a block came loose", "validity_limit": True})  # 0: returns
-    run_demo(lambda: {"stopped": None})
-    run_demo(lambda: [{"stopped": "a case's solver gave up"}])  # a study's rows, as hfcdem study
+    run_demo(lambda: [{"stopped": None}, {}])  # a case not run has no summary
     run_demo(lambda: {"centre_uy_m": 1e-5})  # a demo that shows no run
 
 

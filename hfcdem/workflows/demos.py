@@ -29,7 +29,7 @@ from mpi4py import MPI
 from hfcdem.config.scene import load_scene
 from hfcdem.io.command_line import parse_with_petsc_options
 from hfcdem.io.progress import printer
-from hfcdem.workflows.exit_codes import exit_code_for, run_exit_code
+from hfcdem.workflows.exit_codes import ExitCode, exit_code_for, run_exit_code
 from hfcdem.workflows.run import run_scene
 from hfcdem.workflows.study import load_study, run_study
 
@@ -115,7 +115,8 @@ def run_demo(main: Callable[[], Any]) -> None:
     scene field that is wrong (the line names it and what it expects), 3 for an
     output folder that holds another scene's results (kept; ``--force``
     overwrites them) or cannot be written, or a geometry that cannot be meshed;
-    4 when ``main`` returns the summary of a run that stopped before its end.
+    4 when ``main`` returns the summary of a run, or a study's rows, of which one
+    stopped before its end.
     Every rank raises or returns these together, so every rank exits.
     """
     say = printer(MPI.COMM_WORLD)
@@ -127,10 +128,11 @@ def run_demo(main: Callable[[], Any]) -> None:
             raise
         say(f"error: {exc}", err=True)
         raise SystemExit(code) from None
-    # a demo that shows one run ends as hfcdem run does; a study's rows end with 0, as
-    # hfcdem study does (its stopped cases are in its table)
-    if isinstance(result, Mapping) and "stopped" in result and run_exit_code(result):
-        raise SystemExit(run_exit_code(result))
+    # a demo that shows a run ends as hfcdem run does, one that shows a study's rows as
+    # hfcdem study does: 4 when a run stopped before its end
+    runs = [result] if isinstance(result, Mapping) else result if isinstance(result, list) else []
+    if any(isinstance(r, Mapping) and "stopped" in r and run_exit_code(r) for r in runs):
+        raise SystemExit(ExitCode.STOPPED)
 
 
 __all__ = ["demo_parser", "parse_demo_line", "run_demo", "run_scene_file", "run_study_file"]

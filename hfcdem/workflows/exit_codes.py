@@ -11,14 +11,14 @@ code  name                 meaning
 3     ``OUTPUT_REFUSED``   the output folder holds another scene's results (kept;
                            ``--force`` overwrites them) or cannot be written, or the
                            geometry cannot be meshed
-4     ``STOPPED``          a run, or a report's case, stopped before its end (its
-                           solver gave up); what it wrote stands
+4     ``STOPPED``          a run, or a case of a study or report, stopped before its
+                           end (its solver gave up); what it wrote stands
 5     ``STALLED``          the report's watchdog: no progress line for its minutes
 130   ``INTERRUPTED``      Ctrl-C; every output is written whole
 ====  ===================  ==========================================================
 
 The demo scripts (:func:`hfcdem.workflows.demos.run_demo`) end as ``hfcdem run``
-does: 0, 2, 3, or 4 when the run they show stopped.
+and ``hfcdem study`` do: 0, 2, 3, or 4 when a run they show stopped.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ MEANINGS = {
     ExitCode.OK: "done (the run's end or the model's validity limit)",
     ExitCode.BAD_INPUT: "bad input (the line names the field)",
     ExitCode.OUTPUT_REFUSED: "output refused (another scene's results, unwritable) or unmeshable",
-    ExitCode.STOPPED: "a run or a report's case stopped before its end",
+    ExitCode.STOPPED: "a run, or a case of a study or report, stopped before its end",
     ExitCode.STALLED: "the report's watchdog heard no progress",
     ExitCode.INTERRUPTED: "interrupted (Ctrl-C)",
 }
