@@ -271,33 +271,31 @@ def test_a_demo_given_bad_input_ends_with_one_line_naming_the_field(shared_tmp_p
         ]
 
 
-def test_a_demo_whose_output_holds_another_scenes_results_keeps_them_and_exits_3(capsys):
+@pytest.mark.parametrize(
+    ("error", "message"),
+    [
+        ("OutputInUse", "results/x holds another scene's results"),  # kept, not overwritten
+        # before, a demo ended this in a traceback on every rank; hfcdem run said one line
+        ("MeshingError", "the model has no named cell group"),
+    ],
+)
+def test_a_refused_output_or_an_unmeshable_geometry_ends_a_demo_with_one_line_and_exit_3(
+    error, message, capsys
+):
+    from hfcdem.mesh.tagged import MeshingError
     from hfcdem.workflows.demos import run_demo
     from hfcdem.workflows.run import OutputInUse
 
-    def clash():
-        raise OutputInUse("results/x holds another scene's results")
+    kind = {"OutputInUse": OutputInUse, "MeshingError": MeshingError}[error]
+
+    def fail():
+        raise kind(message)
 
     with pytest.raises(SystemExit) as ended:
-        run_demo(clash)
+        run_demo(fail)
     assert ended.value.code == 3
     if MPI.COMM_WORLD.rank == 0:
-        assert capsys.readouterr().err == "error: results/x holds another scene's results\n"
-
-
-def test_a_demo_whose_geometry_cannot_be_meshed_ends_with_one_line_and_exit_3(capsys):
-    from hfcdem.mesh.tagged import MeshingError
-    from hfcdem.workflows.demos import run_demo
-
-    # before, a demo ended such a scene in a traceback on every rank; hfcdem run said one line
-    def unmeshable():
-        raise MeshingError("the model has no named cell group")
-
-    with pytest.raises(SystemExit) as ended:
-        run_demo(unmeshable)
-    assert ended.value.code == 3
-    if MPI.COMM_WORLD.rank == 0:
-        assert capsys.readouterr().err == "error: the model has no named cell group\n"
+        assert capsys.readouterr().err == f"error: {message}\n"
 
 
 def test_a_demo_keeps_the_traceback_of_an_unforeseen_error():
