@@ -1,5 +1,6 @@
 import os
 
+import numpy as np
 import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -14,6 +15,8 @@ from hfcdem.solvers import (
     reason_name,
     retry_factorisation,
     setup_factorisation,
+    solve_columns,
+    solve_sparse_columns,
     solve_together,
 )
 
@@ -137,6 +140,55 @@ def test_right_hand_sides_solved_together_are_those_solved_one_by_one(comm):
         assert solved[:, k] == pytest.approx(x.getArray(), rel=1e-15)
         exact = [(k + 1.0) * (i + 2.0) / (1.0 + i) for i in range(lo, hi)]
         assert solved[:, k] == pytest.approx(exact, rel=1e-15)
+
+
+def tridiagonal(comm: MPI.Comm, n: int) -> PETSc.Mat:
+    """A distributed SPD tridiagonal matrix: every solution reaches every row."""
+    A = PETSc.Mat().createAIJ((n, n), nnz=3, comm=comm)
+    lo, hi = A.getOwnershipRange()
+    for i in range(lo, hi):
+        A.setValue(i, i, 4.0 + 0.1 * i)
+        for j in (i - 1, i + 1):
+            if 0 <= j < n:
+                A.setValue(i, j, -1.0)
+    A.assemble()
+    return A
+
+
+@pytest.mark.parametrize("solver", ["mumps", "cg"])
+def test_sparse_columns_are_the_dense_columns_on_those_rows(comm, solver):
+    A = tridiagonal(comm, 40)
+    if solver == "mumps":
+        ksp = create_ksp(A, "hfcdem_test_sparse_", DIRECT_LU)
+        ksp.setUp()
+    else:  # no factor to hand a sparse right-hand side: dense columns
+        ksp = PETSc.KSP().create(comm)
+        ksp.setOperators(A)
+        ksp.setType("cg")
+        ksp.getPC().setType("jacobi")
+        ksp.setTolerances(rtol=1e-14, atol=0.0)
+        ksp.setUp()
+    lo, hi = A.getOwnershipRange()
+    rows = np.array([3, 17, 18, 35])  # on both ranks' parts under mpirun -n 2
+    values = np.arange(1.0, 1.0 + 4 * 3).reshape(4, 3)
+    block = np.zeros((hi - lo, 3))
+    mine = (rows >= lo) & (rows < hi)
+    block[rows[mine] - lo] = values[mine]
+    sparse = solve_sparse_columns(ksp, rows, values)
+    assert sparse.shape == (hi - lo, 3)
+    dense = solve_columns(ksp, block)
+    rel = 1e-15 if solver == "mumps" else 1e-12
+    assert sparse == pytest.approx(dense, rel=rel, abs=rel * np.abs(dense).max())
+    # and they solve the system: the residual of every column
+    for k in range(3):
+        x, r = A.createVecRight(), A.createVecLeft()
+        x.setArray(sparse[:, k])
+        A.mult(x, r)
+        assert r.getArray() == pytest.approx(block[:, k], abs=1e-12 * np.abs(values).max())
+        x.destroy()
+        r.destroy()
+    ksp.destroy()
+    A.destroy()
 
 
 def test_mumps_orderings_names_only_the_orderings_that_ran():

@@ -10,8 +10,8 @@ change in it.  With ``Z = K0^-1 E`` and ``S = E^T Z``,
     K^-1 b = y - Z (I + D S)^-1 D E^T y,    y = K0^-1 b,
 
 so the factor of ``K0`` serves the solves after any number of events: an
-event costs the new columns of ``Z`` (one MUMPS solve with several right-hand
-sides) instead of a numeric refactorisation, and a solve costs ``n x r``
+event costs the new columns of ``Z`` (one MUMPS solve with several sparse
+right-hand sides) instead of a numeric refactorisation, and a solve costs ``n x r``
 products and, where ``I + D S`` is ill-conditioned, a second back-substitution
 (one step of iterative refinement).
 A change is compressed to its range (an eigen-decomposition of its dense
@@ -40,7 +40,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from hfcdem.solvers import check_ksp, dense_rows, solve_columns
+from hfcdem.solvers import check_ksp, dense_rows, solve_columns, solve_sparse_columns
 
 # columns of Z solved together: MUMPS's dense right-hand side is n x this
 _COLUMN_BATCH = 32
@@ -157,13 +157,10 @@ class LowRankCorrection:
         if N.shape[1]:
             N -= E @ (E.T @ N)  # once more against the basis: orthogonal to round-off
             N, _ = np.linalg.qr(N)
-            columns = []
-            mine = (rows_all >= self.lo) & (rows_all < self.hi)
-            for start in range(0, N.shape[1], _COLUMN_BATCH):
-                part = N[:, start : start + _COLUMN_BATCH]
-                block = np.zeros((self.hi - self.lo, part.shape[1]))
-                block[rows_all[mine] - self.lo] = part[mine]
-                columns.append(solve_columns(self.factor, block))
+            columns = [
+                solve_sparse_columns(self.factor, rows_all, N[:, start : start + _COLUMN_BATCH])
+                for start in range(0, N.shape[1], _COLUMN_BATCH)
+            ]
             check_ksp(self.factor, "low-rank columns of the CDEM stiffness")
             # past the columns held: a refusal below leaves them unused (rank is E's)
             self._append_columns(columns)
