@@ -18,7 +18,7 @@ A change is compressed to its range (an eigen-decomposition of its dense
 block) before it adds columns, and a change inside the range already held (a
 contact switch of a facet that broke since the factorisation) adds none: a
 spring facet costs 9 columns, not 18.  At No. 2's default mesh a numeric
-refactorisation takes 15-19 s, a one-facet event with the solve after it 2 s
+refactorisation takes 15-19 s, a one-facet event with the solve after it 0.9 s
 (benchmarks/README.md).
 
 The compression is exact to round-off of the change (1e-16 of it).  Where the
