@@ -98,6 +98,24 @@ def test_the_corrected_solve_equals_a_factorisation_of_the_changed_matrix():
     assert gap < 1e-14 * scale
 
 
+def test_the_correction_after_a_refactorisation_reuses_the_columns_storage_and_stays_exact():
+    first = {(3, 3): 0.9, (4, 4): 0.9, (3, 4): -0.9, (4, 3): -0.9}
+    second = {(30, 30): 5.0, (31, 31): 5.0, (30, 31): -5.0, (31, 30): -5.0, (3, 3): -0.5}
+    before = LowRankCorrection(factor(chain()), max_columns=4)
+    assert before.add(change(first))
+    held = before.Z
+    # refactorised with the first change in: the next correction holds the second only
+    K1 = chain(first)
+    after = LowRankCorrection(factor(K1), max_columns=4, after=before)
+    assert after.add(change(second))
+    assert after.rank == 2
+    assert np.shares_memory(after.Z, held)  # no new n x max_columns block
+    both = {k: first.get(k, 0.0) + second.get(k, 0.0) for k in {*first, *second}}
+    K2 = chain(both)
+    x = solve(corrected_solver(after, K2), K2)
+    assert relative_gap(x, solve(factor(chain(both)), K2)) < 1e-14
+
+
 def test_a_change_inside_the_range_held_adds_no_column():
     """A spring cut, then half restored (a contact closing on a broken facet)."""
     cut = {(3, 3): -0.9, (4, 4): -0.9, (3, 4): 0.9, (4, 3): 0.9}

@@ -105,6 +105,7 @@ class StiffnessOperator:
         return self._solver
 
     def _fresh(self, values: np.ndarray, key: Hashable, reduce: Reduce | None) -> None:
+        previous = self._correction  # its storage serves the next one, if of the same size
         self.destroy()
         t0 = time.perf_counter()
         A = self._assemble()
@@ -116,7 +117,7 @@ class StiffnessOperator:
         self._A = A
         if self.max_columns > 0 and mumps_info(self._ksp) is not None:
             self._current = A.copy()
-            self._correction = LowRankCorrection(self._ksp, self.max_columns)
+            self._correction = LowRankCorrection(self._ksp, self.max_columns, previous)
         self._values, self._key, self._updates = values, key, 0
         self.counts["assembled"] += 1
         self.seconds["assemble"] += t1 - t0
@@ -161,7 +162,7 @@ class StiffnessOperator:
         if codes and (min(codes) in WORKSPACE_ERRORS or min(codes) < 0):
             return False  # assembled afresh with more room by the caller
         if self._correction is not None:
-            self._correction = LowRankCorrection(self._ksp, self.max_columns)
+            self._correction = LowRankCorrection(self._ksp, self.max_columns, self._correction)
         if self._solver is not self._ksp and self._solver is not None:
             self._solver.destroy()
         self._solver = self._ksp
