@@ -66,6 +66,7 @@ from hfcdem.solid.interfaces import (
 )
 from hfcdem.solid.nonlocal_strength import StressFilter
 from hfcdem.solid.operator import StiffnessOperator
+from hfcdem.solid.points import PointValues
 from hfcdem.solid.reduction import ReducedSystem, glued_facet_set
 from hfcdem.solid.states import OPEN, SLIP, STICK, CascadeStopped, InterfaceStates, faces_overlap
 from hfcdem.solvers import (
@@ -252,6 +253,7 @@ class CDEMSolid:
         # reduced mode: free springs only in a band, glued (continuous) elsewhere
         self.band = InterfaceBand(mesh, self.interface_facets, *band, all_free=mode == "full")
         self._recovery = StressRecovery(self.u, material)
+        self._probes: list[tuple[np.ndarray, PointValues, PointValues]] = []  # _point_values
         # strength over a material length: the check reads the filtered stress
         self._filter = (
             StressFilter(self.u, material, self.facets, self.cells[:, 0],
@@ -635,9 +637,30 @@ class CDEMSolid:
     def jumps(self, u: dolfinx.fem.Function, x: np.ndarray | None = None) -> np.ndarray:
         """Displacement jump u+ - u- at one point per facet (default: midpoints)."""
         x = self.midpoints if x is None else x
-        up = u.eval(x, self.cells[:, 0]) if len(x) else np.zeros((0, self.gdim))
-        um = u.eval(x, self.cells[:, 1]) if len(x) else np.zeros((0, self.gdim))
+        if not len(x):
+            return np.zeros((0, self.gdim))
+        sides = self._point_values(x)
+        if sides is not None:
+            return sides[0](u) - sides[1](u)
+        up = u.eval(x, self.cells[:, 0])
+        um = u.eval(x, self.cells[:, 1])
         return np.asarray(up - um).reshape(-1, self.gdim)
+
+    def _point_values(self, x: np.ndarray) -> tuple[PointValues, PointValues] | None:
+        """Return the precomputed values on both sides at ``x`` if it is a fixed point set.
+
+        The midpoints and the strength points are read after every solve; any
+        other points go through ``Function.eval``.
+        """
+        for held, plus, minus in self._probes:
+            if held is x:
+                return plus, minus
+        fixed = x is self.midpoints or any(x is p for p in self.strength_points)
+        if not fixed or not PointValues.applies(self.V):
+            return None
+        plus, minus = (PointValues(self.V, x, self.cells[:, k]) for k in (0, 1))
+        self._probes.append((x, plus, minus))
+        return plus, minus
 
     def snapshot(
         self,
