@@ -68,6 +68,7 @@ from hfcdem.solid.nonlocal_strength import StressFilter
 from hfcdem.solid.operator import StiffnessOperator
 from hfcdem.solid.points import PointValues
 from hfcdem.solid.reduction import ReducedSystem, glued_facet_set
+from hfcdem.solid.retag import TaggedForm
 from hfcdem.solid.states import OPEN, SLIP, STICK, CascadeStopped, InterfaceStates, faces_overlap
 from hfcdem.solvers import (
     DIRECT_CHOLESKY,
@@ -265,9 +266,13 @@ class CDEMSolid:
         self._reduced_version: tuple[int, int] | None = None
         # the compiled stiffness form of the last interface states (a new one costs ~60 ms)
         self._stiffness_form: tuple[np.ndarray, int, dolfinx.fem.Form] | None = None
-        # load forms of the current interface states and band, by their terms
+        # load forms by their terms, compiled once; retagged when the states or band change
         self._load_forms: dict[LoadTerms, LoadForm] = {}
         self._load_forms_stamp: tuple[np.ndarray, int] | None = None
+        self._tags: tuple[int, dolfinx.mesh.MeshTags | None] = (0, None)  # version, tags
+        # the stiffness and its change, compiled once (retag.TaggedForm)
+        self._stiffness_tagged: TaggedForm | None = None
+        self._change_tagged: TaggedForm | None = None
         if low_rank is None:
             dofs = self.V.dofmap.index_map.size_global * gdim
             low_rank = min(LOW_RANK_COLUMNS, LOW_RANK_BYTES // (8 * dofs))
@@ -468,10 +473,16 @@ class CDEMSolid:
 
         Returns the compiled form and the matrix; the caller owns (destroys) the matrix.
         """
-        a_form = dolfinx.fem.form(self.forms.stiffness(self._measure()))
+        a_form = self._stiffness_form_now()
         A = dolfinx.fem.petsc.assemble_matrix(a_form, bcs=self._bcs)
         A.assemble()
         return a_form, A
+
+    def _stiffness_form_now(self) -> dolfinx.fem.Form:
+        """Return the stiffness form over the current interface tags (compiled once; collective)."""
+        if self._stiffness_tagged is None:
+            self._stiffness_tagged = TaggedForm(self.forms.stiffness(self._measure()))
+        return self._stiffness_tagged.form(self.interface_tags())
 
     def assemble_load(self, a_form: dolfinx.fem.Form, L_form: dolfinx.fem.Form) -> PETSc.Vec:
         """Assemble the right-hand side of ``L_form`` (lifted and with the Dirichlet values)."""
@@ -489,8 +500,10 @@ class CDEMSolid:
         Dirichlet rows and columns are zero.  The caller destroys the matrix.
         """
         tags = change_tags(self.mesh, self.interface_facets, old, new)
-        dS = ufl.Measure("dS", domain=self.mesh, subdomain_data=tags)
-        form = dolfinx.fem.form(self.forms.stiffness_change(dS))
+        if self._change_tagged is None:
+            dS = ufl.Measure("dS", domain=self.mesh, subdomain_data=tags)
+            self._change_tagged = TaggedForm(self.forms.stiffness_change(dS))
+        form = self._change_tagged.form(tags)
         dK = dolfinx.fem.petsc.assemble_matrix(form, bcs=self._bcs, diagonal=0.0)
         dK.assemble()
         return dK
@@ -517,7 +530,7 @@ class CDEMSolid:
         stale = cached is None or cached[1] != self.band.version
         stale = stale or not np.array_equal(cached[0], values)  # type: ignore[index]
         if self.comm.allreduce(stale, op=MPI.LOR):  # compiling a form is collective
-            form = dolfinx.fem.form(self.forms.stiffness(self._measure()))
+            form = self._stiffness_form_now()
             self._stiffness_form = cached = (values.copy(), self.band.version, form)
         assert cached is not None
         a_form = cached[2]
@@ -615,14 +628,18 @@ class CDEMSolid:
         stale = stamp is None or stamp[1] != self.band.version
         stale = stale or not np.array_equal(stamp[0], values)  # type: ignore[index]
         if self.comm.allreduce(stale, op=MPI.LOR):
-            self._load_forms.clear()
             self._load_forms_stamp = (values.copy(), self.band.version)
+            self._tags = (self._tags[0] + 1, None)
+        version, tags = self._tags
+        if tags is None:
+            tags = self.interface_tags()
+            self._tags = (version, tags)
         terms = load_terms(loads, self.states, self.comm)
         form = self._load_forms.get(terms)
         if form is None:
             form = self._load_forms[terms] = LoadForm(self.forms, terms, self._measure())
         form.set(loads, self.states)
-        return form.form
+        return form.form_at(tags, version)
 
     def solve(self, loads: Loads, unit: Loads | None = None) -> None:
         """Solve for ``loads`` (and, with the same matrix, for ``unit`` into ``u_unit``)."""

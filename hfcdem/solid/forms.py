@@ -26,6 +26,7 @@ from hfcdem.mesh.tagged import TaggedMesh
 from hfcdem.solid.elastic import strain, stress
 from hfcdem.solid.facets import FacetFunctions, InterfaceFacets
 from hfcdem.solid.interfaces import FacetState
+from hfcdem.solid.retag import TaggedForm
 from hfcdem.solid.states import OPEN, SLIP, InterfaceStates
 
 # interior-facet integral ids
@@ -249,6 +250,8 @@ class LoadForm:
         self.terms = terms
         self._forms, self._gdim = forms, gdim
         self._compiled: dolfinx.fem.Form | None = None
+        self._tagged: TaggedForm | None = None  # form_at: compiled once, retagged per states
+        self._at: tuple[int, dolfinx.fem.Form] | None = None
 
         def const(shape: tuple[int, ...] = ()) -> dolfinx.fem.Constant:
             return dolfinx.fem.Constant(mesh, np.zeros(shape, dtype=scalar))
@@ -295,6 +298,18 @@ class LoadForm:
         if self._compiled is None:
             self._compiled = dolfinx.fem.form(self.ufl_form)
         return self._compiled
+
+    def form_at(self, tags: dolfinx.mesh.MeshTags, version: int) -> dolfinx.fem.Form:
+        """Return the form with its interface integrals over ``tags`` (collective at first).
+
+        ``version`` names the tags: a call with the version of the last one
+        returns its form.  Compiled once (:class:`~hfcdem.solid.retag.TaggedForm`).
+        """
+        if self._tagged is None:
+            self._tagged = TaggedForm(self.ufl_form)
+        if self._at is None or self._at[0] != version:
+            self._at = (version, self._tagged.form(tags))
+        return self._at[1]
 
     def set(self, loads: Loads, states: InterfaceStates) -> None:
         """Set the values of ``loads`` (with the terms of this form) at ``states`` (collective)."""
