@@ -2,11 +2,12 @@
 
 An interface event changes which facets each interface integral covers (a
 spring becomes an open crack), not the integrands.  ``dolfinx.fem.form`` on the
-same UFL form with new tags computes its signature and looks the JIT cache up
-again: 5-10 ms a form, and a pumped run makes thousands (No. 2 coarse, 120 s
-with seepage: 3,400 forms, 26 s of its 390 s).  :class:`TaggedForm` compiles the
-UFL form once and builds the DOLFINx form for new interior-facet tags with
-``dolfinx.fem.create_form``.
+same UFL form with new tags processes the UFL again and looks the JIT cache up:
+a pumped run makes thousands of forms.  :class:`TaggedForm` compiles the UFL
+form once and builds the DOLFINx form for new interior-facet tags with
+``dolfinx.fem.create_form``: No. 2 coarse with seepage, 120 s pumped, went from
+3,400 compilations and 389 s to 9 and 327 s, the same run to every figure
+(benchmarks/README.md).
 """
 
 from __future__ import annotations
