@@ -264,7 +264,7 @@ class CDEMSolid:
         )  # fmt: skip
         self._reduced: ReducedSystem | None = None
         self._reduced_version: tuple[int, int] | None = None
-        # the compiled stiffness form of the last interface states (a new one costs ~60 ms)
+        # the stiffness form of the last interface states (retagged: _stiffness_form_now)
         self._stiffness_form: tuple[np.ndarray, int, dolfinx.fem.Form] | None = None
         # load forms by their terms, compiled once; retagged when the states or band change
         self._load_forms: dict[LoadTerms, LoadForm] = {}
@@ -619,9 +619,10 @@ class CDEMSolid:
     def load_form(self, loads: Loads) -> dolfinx.fem.Form:
         """Compiled right-hand side of ``loads`` at the current interface states (collective).
 
-        The form of each :class:`~hfcdem.solid.forms.LoadTerms` is compiled once
-        per interface states and band, and its values set for every call: it is
-        valid until the next call with loads of the same terms.
+        The form of each :class:`~hfcdem.solid.forms.LoadTerms` is compiled once,
+        retagged when the interface states or the band change, and its values set
+        for every call: it is valid until the next call with loads of the same
+        terms.
         """
         values = interface_values(self.states)
         stamp = self._load_forms_stamp

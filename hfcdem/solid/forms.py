@@ -239,9 +239,10 @@ class LoadForm:
     """The load form of some :class:`LoadTerms`, its values set per solve.
 
     Every value is a ``Constant`` or a per-facet function set by :meth:`set`,
-    so a solid solving many loads at the same interface states compiles the
-    form once (the UFL signature and the JIT cache lookup cost 10-20 ms a
-    form, more than a back-substitution of a small solid).
+    and :meth:`form_at` retags the interface integrals for new states, so a
+    solid compiles the form once for all its loads and states (the UFL
+    processing and the JIT cache lookup cost 10-20 ms a form, more than a
+    back-substitution of a small solid).
     """
 
     def __init__(self, forms: SolidForms, terms: LoadTerms, dS: ufl.Measure) -> None:
