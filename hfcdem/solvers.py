@@ -308,7 +308,7 @@ def solve_sparse_columns(ksp: PETSc.KSP, rows: np.ndarray, values: np.ndarray) -
     factor takes them as a sparse right-hand side (ICNTL(20)), so its forward
     substitution skips the parts of the factor those rows do not reach: a
     low-rank event's columns (:mod:`hfcdem.solid.lowrank`) on No. 2's default
-    mesh cost 42 % less than as dense columns (benchmarks/README.md).  Any
+    mesh cost 40 % less than as dense columns (benchmarks/README.md).  Any
     other ``ksp`` solves the dense columns (:func:`solve_columns`).  Returns
     this rank's rows of ``X`` (a copy).
     """

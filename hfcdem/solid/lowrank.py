@@ -42,7 +42,7 @@ from petsc4py import PETSc
 
 from hfcdem.solvers import check_ksp, dense_rows, solve_columns, solve_sparse_columns
 
-# columns of Z solved together: MUMPS's dense right-hand side is n x this
+# columns of Z solved together: their dense solution block is n x this
 _COLUMN_BATCH = 32
 # an eigenvalue of a change below this share of its largest is round-off
 _RANGE_TOLERANCE = 1e-13
@@ -70,8 +70,8 @@ class LowRankCorrection:
     :meth:`add` refuses and the caller refactorises.  ``after``: the correction
     of the factorisation this one replaces, whose storage for ``Z`` it takes
     over (its memory is touched already: at No. 2's default mesh, growing and
-    first touching ``n x r`` anew after every refactorisation cost 2 % of a run);
-    ``after`` is spent then.
+    first touching ``n x r`` anew after every refactorisation took 7.9 s of the
+    first 38 s, 4.0 s since); ``after`` is spent then.
     """
 
     def __init__(
