@@ -657,7 +657,7 @@ class CDEMSolid:
         x = self.midpoints if x is None else x
         if not len(x):
             return np.zeros((0, self.gdim))
-        sides = self._point_values(x)
+        sides = self._point_values(x) if u.function_space is self.V else None
         if sides is not None:
             return sides[0](u) - sides[1](u)
         up = u.eval(x, self.cells[:, 0])
