@@ -10,7 +10,10 @@ cavity balance is one Newton on the joints and the cavity pressure together;
 trial seepage steps appear only where that Newton failed and the secant
 took over.  It also shows what an interface event costs: the joints' network
 rebuilt, MUMPS's back-substitutions and numeric refactorisations of the
-solid, and the low-rank (Woodbury) columns.
+solid, and the low-rank (Woodbury) columns.  The KSP set-ups are split by
+their caller: the solid's factorisations (``solvers.py:attempt`` the first,
+``operator.py:_update`` the numeric ones after events) and the joints' LU
+(``seepage.py``).
 
     make run CMD="python3 benchmarks/seepage_profile.py --seconds 600"
     make run CMD="python3 benchmarks/seepage_profile.py --resolution default --duration 38 \
@@ -62,6 +65,19 @@ def _cumulative(stats: pstats.Stats, pattern: str) -> tuple[float, int]:
             total += cum
             calls += ncalls
     return total, calls
+
+
+def _setups_by_caller(stats: pstats.Stats) -> dict[str, tuple[float, int]]:
+    """Seconds and calls of ``KSP.setUp`` by the module that called it."""
+    out: dict[str, tuple[float, int]] = {}
+    for (_, _, name), entry in stats.stats.items():  # type: ignore[attr-defined]
+        if "'setUp' of 'petsc4py.PETSc.KSP'" not in name:
+            continue
+        for (cfile, _, cname), (_, ncalls, _, cum) in entry[4].items():
+            where = f"{Path(cfile).name}:{cname}"
+            seconds, calls = out.get(where, (0.0, 0))
+            out[where] = (seconds + cum, calls + ncalls)
+    return dict(sorted(out.items(), key=lambda item: -item[1][0]))
 
 
 def main() -> None:
@@ -118,6 +134,9 @@ def main() -> None:
     for label, pattern in parts:
         cum, calls = _cumulative(stats, pattern)
         print(f"{label:40s} {calls:6d} calls {cum:8.1f} s {cum / wall:6.1%}")
+    # the set-ups by who asked: the solid's factorisations, or the joints' LU
+    for where, (cum, calls) in _setups_by_caller(stats).items():
+        print(f"  set-ups from {where:27s} {calls:6d} calls {cum:8.1f} s {cum / wall:6.1%}")
     stats.sort_stats("tottime").print_stats(12)
 
 
