@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
+from test_lowrank import chain
 
 from hfcdem.solvers import (
     DIRECT_LU,
@@ -142,22 +143,9 @@ def test_right_hand_sides_solved_together_are_those_solved_one_by_one(comm):
         assert solved[:, k] == pytest.approx(exact, rel=1e-15)
 
 
-def tridiagonal(comm: MPI.Comm, n: int) -> PETSc.Mat:
-    """A distributed SPD tridiagonal matrix: every solution reaches every row."""
-    A = PETSc.Mat().createAIJ((n, n), nnz=3, comm=comm)
-    lo, hi = A.getOwnershipRange()
-    for i in range(lo, hi):
-        A.setValue(i, i, 4.0 + 0.1 * i)
-        for j in (i - 1, i + 1):
-            if 0 <= j < n:
-                A.setValue(i, j, -1.0)
-    A.assemble()
-    return A
-
-
 @pytest.mark.parametrize("solver", ["mumps", "cg"])
 def test_sparse_columns_are_the_dense_columns_on_those_rows(comm, solver):
-    A = tridiagonal(comm, 40)
+    A = chain()  # SPD tridiagonal, 40 unknowns: every solution reaches every row
     if solver == "mumps":
         ksp = create_ksp(A, "hfcdem_test_sparse_", DIRECT_LU)
         ksp.setUp()
