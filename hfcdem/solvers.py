@@ -14,6 +14,7 @@ after which what was computed so far is kept.
 
 from __future__ import annotations
 
+import ctypes
 import sys
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
@@ -341,6 +342,97 @@ def solve_sparse_columns(ksp: PETSc.KSP, rows: np.ndarray, values: np.ndarray) -
     return solved
 
 
+def _mumps_inverse_call() -> Callable[[int, int], int] | None:
+    """``MatMumpsGetInverseTranspose`` of the PETSc library petsc4py runs on (None: absent).
+
+    petsc4py does not wrap it; the symbol is found through petsc4py's own
+    extension module, whose dependencies include libpetsc.
+    """
+    try:
+        call = ctypes.CDLL(PETSc.__file__).MatMumpsGetInverseTranspose
+    except (OSError, AttributeError):
+        return None
+    call.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+    call.restype = ctypes.c_int
+    return call
+
+
+_INVERSE_CALL = _mumps_inverse_call()
+
+
+def inverse_entries(ksp: PETSc.KSP, rows: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """Return the block ``K^-1[rows, columns]`` of a symmetric ``K`` (collective).
+
+    ``rows`` and ``columns``: global indices, the same on every rank; so is the
+    ``len(rows) x len(columns)`` block returned.  ``ksp`` is set up (factorised).
+    A MUMPS factor computes those entries alone (ICNTL(30)): its forward and
+    backward substitutions skip the parts of the factor that neither index set
+    reaches.  On No. 2's default mesh the entries of 10 neighbouring facets'
+    unknowns (60-108 columns) at up to 7,500 rows take 0.3-0.5 s, where the same
+    columns in full take 1.4-4.0 s (``benchmarks/inverse_entries.py``).  Any
+    other ``ksp`` solves the columns (:func:`solve_sparse_columns`) and keeps
+    the rows.  Not used by a run yet: a low-rank correction built on it measured
+    5 % faster at the default mesh and 9 % slower at the coarse one
+    (benchmarks/README.md, 2026-12-07).
+    """
+    rows = np.asarray(rows, dtype=np.int64)
+    columns = np.asarray(columns, dtype=np.int64)
+    comm = ksp.getComm().tompi4py()
+    if len(rows) == 0 or len(columns) == 0:
+        return np.zeros((len(rows), len(columns)))
+    if mumps_info(ksp) is None or _INVERSE_CALL is None:
+        A = ksp.getOperators()[0]
+        lo, hi = A.getOwnershipRange()
+        solved = solve_sparse_columns(ksp, columns, np.eye(len(columns)))
+        mine = (rows >= lo) & (rows < hi)
+        part = np.zeros((len(rows), len(columns)))
+        part[mine] = solved[rows[mine] - lo]
+        return comm.allreduce(part, op=MPI.SUM)
+    n = ksp.getOperators()[0].getSize()[0]
+    host = comm.rank == 0
+    # the requested pattern: row c of an n x n AIJ held whole on rank 0 (PETSc hands
+    # MUMPS the host's diagonal block) asks for column c of the inverse at ``rows``
+    row_order, column_order = np.argsort(rows), np.argsort(columns)
+    itype = PETSc.IntType
+    indptr = np.zeros(n + 1 if host else 1, dtype=itype)
+    indices = np.zeros(0, dtype=itype)
+    if host:
+        counts = np.zeros(n, dtype=itype)
+        counts[columns] = len(rows)
+        indptr[1:] = np.cumsum(counts)
+        indices = np.tile(rows[row_order].astype(itype), len(columns))
+    local = n if host else 0
+    Bt = PETSc.Mat().createAIJ(
+        ((local, n), (local, n)), csr=(indptr, indices, np.zeros(len(indices))), comm=comm
+    )
+    F = ksp.getPC().getFactorMatrix()
+    # the call leaves MUMPS set for inverse entries, sparse right-hand sides and a
+    # centralised solution; the solves after it need the settings before it
+    saved = {k: F.getMumpsIcntl(k) for k in (20, 21, 30)}
+    try:
+        code = _INVERSE_CALL(F.handle, Bt.handle)
+    finally:
+        for key, value in saved.items():
+            F.setMumpsIcntl(key, value)
+    if comm.allreduce(code, op=MPI.MAX) != 0:
+        Bt.destroy()
+        info = int(F.getMumpsInfog(1))
+        failed = int(PETSc.KSP.ConvergedReason.DIVERGED_PC_FAILED)
+        raise SolverError(
+            f"MUMPS's entries of the inverse failed: PETSc error {code}, INFOG(1) = {info}",
+            failed,
+            info,
+        )
+    block = np.zeros((len(rows), len(columns)))
+    if host:
+        held = Bt.getDiagonalBlock() if comm.size > 1 else Bt
+        _, _, values = held.getValuesCSR()
+        # CSR rows in increasing column index, each with ``rows`` in increasing order
+        block[np.ix_(row_order, column_order)] = values.reshape(len(columns), len(rows)).T
+    Bt.destroy()
+    return comm.bcast(block, root=0)
+
+
 __all__ = [
     "DIRECT_CHOLESKY",
     "DIRECT_LU",
@@ -351,6 +443,7 @@ __all__ = [
     "check_ksp",
     "create_ksp",
     "dense_rows",
+    "inverse_entries",
     "mumps_info",
     "mumps_orderings",
     "petsc_options",

@@ -7,10 +7,12 @@ from petsc4py import PETSc
 from test_lowrank import chain
 
 from hfcdem.solvers import (
+    DIRECT_CHOLESKY,
     DIRECT_LU,
     SolverError,
     check_ksp,
     create_ksp,
+    inverse_entries,
     mumps_orderings,
     petsc_options,
     reason_name,
@@ -175,6 +177,41 @@ def test_sparse_columns_are_the_dense_columns_on_those_rows(comm, solver):
         assert r.getArray() == pytest.approx(block[:, k], abs=1e-12 * np.abs(values).max())
         x.destroy()
         r.destroy()
+    ksp.destroy()
+    A.destroy()
+
+
+@pytest.mark.parametrize("solver", ["mumps", "cg"])
+def test_inverse_entries_are_the_dense_inverse_s_block(comm, solver):
+    A = chain()  # SPD tridiagonal: its inverse is dense, every entry non-zero
+    A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    if solver == "mumps":
+        ksp = create_ksp(A, "hfcdem_test_inverse_", DIRECT_CHOLESKY)
+        ksp.setUp()
+    else:  # no MUMPS factor: the columns solved, their rows kept
+        ksp = PETSc.KSP().create(comm)
+        ksp.setOperators(A)
+        ksp.setType("cg")
+        ksp.getPC().setType("jacobi")
+        ksp.setTolerances(rtol=1e-14, atol=0.0)
+        ksp.setUp()
+    n = A.getSize()[0]
+    lo, hi = A.getOwnershipRange()
+    dense = np.zeros((n, n))
+    dense[lo:hi] = A.getValues(range(lo, hi), range(n))
+    inverse = np.linalg.inv(comm.allreduce(dense, op=MPI.SUM))
+    rows = np.array([35, 3, 18, 17, 30])  # unsorted, on both ranks' parts under mpirun -n 2
+    columns = np.array([18, 3, 39])
+    block = inverse_entries(ksp, rows, columns)
+    assert block.shape == (5, 3)
+    want = inverse[np.ix_(rows, columns)]
+    rel = 1e-14 if solver == "mumps" else 1e-11
+    assert np.abs(block - want).max() < rel * np.abs(want).max()
+    # the same on every rank, and the factor's plain solves work after it
+    assert comm.allreduce(float(np.abs(block - comm.bcast(block)).max()), op=MPI.MAX) == 0.0
+    x = solve_columns(ksp, np.ones((hi - lo, 1)))
+    assert x[:, 0] == pytest.approx(inverse[lo:hi].sum(axis=1), rel=1e-12)
+    assert inverse_entries(ksp, np.zeros(0, dtype=int), columns).shape == (0, 3)
     ksp.destroy()
     A.destroy()
 
