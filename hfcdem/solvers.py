@@ -377,6 +377,9 @@ def inverse_entries(ksp: PETSc.KSP, rows: np.ndarray, columns: np.ndarray) -> np
     """
     rows = np.asarray(rows, dtype=np.int64)
     columns = np.asarray(columns, dtype=np.int64)
+    for name, index in (("rows", rows), ("columns", columns)):
+        if len(np.unique(index)) != len(index):  # the requested pattern has one entry each
+            raise ValueError(f"inverse_entries: {name} must be distinct indices")
     comm = ksp.getComm().tompi4py()
     if len(rows) == 0 or len(columns) == 0:
         return np.zeros((len(rows), len(columns)))

@@ -212,6 +212,8 @@ def test_inverse_entries_are_the_dense_inverse_s_block(comm, solver):
     x = solve_columns(ksp, np.ones((hi - lo, 1)))
     assert x[:, 0] == pytest.approx(inverse[lo:hi].sum(axis=1), rel=1e-12)
     assert inverse_entries(ksp, np.zeros(0, dtype=int), columns).shape == (0, 3)
+    with pytest.raises(ValueError, match="columns must be distinct"):
+        inverse_entries(ksp, rows, np.array([3, 3]))
     ksp.destroy()
     A.destroy()
 
