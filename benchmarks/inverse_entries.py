@@ -5,7 +5,7 @@ An interface event needs ``K0^-1`` on the changed unknowns only
 interfaces (the facets nearest one of the zone, a crack's shape), this prints
 the seconds MUMPS takes for the entries of ten more facets' unknowns at every
 unknown held (:func:`hfcdem.solvers.inverse_entries`), against the seconds of
-those unknowns' columns of ``K0^-1`` in full (:func:`solve_sparse_columns`,
+those unknowns' columns of ``K0^-1`` in full (:func:`columns_at_rows`,
 what a correction held before 2026-12-07), with the largest difference
 between the two; then what a corrected solve adds: one solve whose right-hand
 side lives on the held unknowns, against a dense one.
@@ -30,6 +30,7 @@ from hfcdem.mesh.build import create_scene_mesh
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solvers import (
     DIRECT_CHOLESKY,
+    columns_at_rows,
     create_ksp,
     inverse_entries,
     solve_columns,
@@ -75,16 +76,6 @@ def unknowns(solid: CDEMSolid, points: np.ndarray) -> np.ndarray:
     return np.unique(np.concatenate(comm.allgather(mine))).astype(np.int64)
 
 
-def columns_at(ksp: PETSc.KSP, rows: np.ndarray, new: np.ndarray) -> np.ndarray:
-    """``K^-1[rows, new]`` from the columns ``new`` solved in full (the same on every rank)."""
-    lo, hi = ksp.getOperators()[0].getOwnershipRange()
-    solved = solve_sparse_columns(ksp, new, np.eye(len(new)))
-    mine = (rows >= lo) & (rows < hi)
-    part = np.zeros((len(rows), len(new)))
-    part[mine] = solved[rows[mine] - lo]
-    return comm.allreduce(part, op=MPI.SUM)  # type: ignore[no-any-return]
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("resolution", help="coarse, default or paper")
@@ -108,7 +99,7 @@ def main() -> None:
         new = np.setdiff1d(unknowns(solid, points[held : held + 10]), old)
         rows = np.concatenate([old, new])
         block, t_entries = timed(partial(inverse_entries, ksp, rows, new))
-        full, t_columns = timed(partial(columns_at, ksp, rows, new))
+        full, t_columns = timed(partial(columns_at_rows, ksp, rows, new))
         gap = float(np.abs(block - full).max() / np.abs(full).max())
         say(f"| {held} | {len(old)} | {len(new)} | {t_entries:.3f} | {t_columns:.3f} | {gap:.1e} |")
     say("\n| right-hand side on | unknowns | sparse solve s | dense solve s |\n|---|---|---|---|")

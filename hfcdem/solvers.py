@@ -360,6 +360,21 @@ def _mumps_inverse_call() -> Callable[[int, int], int] | None:
 _INVERSE_CALL = _mumps_inverse_call()
 
 
+def columns_at_rows(ksp: PETSc.KSP, rows: np.ndarray, columns: np.ndarray) -> np.ndarray:
+    """Return ``K^-1[rows, columns]`` from the columns solved in full (collective).
+
+    Global indices, the same on every rank, as is the block returned; what
+    :func:`inverse_entries` does without a MUMPS factor.
+    """
+    rows = np.asarray(rows, dtype=np.int64)
+    lo, hi = ksp.getOperators()[0].getOwnershipRange()
+    solved = solve_sparse_columns(ksp, np.asarray(columns), np.eye(len(columns)))
+    mine = (rows >= lo) & (rows < hi)
+    part = np.zeros((len(rows), len(columns)))
+    part[mine] = solved[rows[mine] - lo]
+    return ksp.getComm().tompi4py().allreduce(part, op=MPI.SUM)
+
+
 def inverse_entries(ksp: PETSc.KSP, rows: np.ndarray, columns: np.ndarray) -> np.ndarray:
     """Return the block ``K^-1[rows, columns]`` of a symmetric ``K`` (collective).
 
@@ -384,13 +399,7 @@ def inverse_entries(ksp: PETSc.KSP, rows: np.ndarray, columns: np.ndarray) -> np
     if len(rows) == 0 or len(columns) == 0:
         return np.zeros((len(rows), len(columns)))
     if mumps_info(ksp) is None or _INVERSE_CALL is None:
-        A = ksp.getOperators()[0]
-        lo, hi = A.getOwnershipRange()
-        solved = solve_sparse_columns(ksp, columns, np.eye(len(columns)))
-        mine = (rows >= lo) & (rows < hi)
-        part = np.zeros((len(rows), len(columns)))
-        part[mine] = solved[rows[mine] - lo]
-        return comm.allreduce(part, op=MPI.SUM)
+        return columns_at_rows(ksp, rows, columns)
     n = ksp.getOperators()[0].getSize()[0]
     host = comm.rank == 0
     # the requested pattern: row c of an n x n AIJ held whole on rank 0 (PETSc hands
@@ -444,6 +453,7 @@ __all__ = [
     "SolverError",
     "ValidityLimit",
     "check_ksp",
+    "columns_at_rows",
     "create_ksp",
     "dense_rows",
     "inverse_entries",

@@ -145,6 +145,17 @@ def test_right_hand_sides_solved_together_are_those_solved_one_by_one(comm):
         assert solved[:, k] == pytest.approx(exact, rel=1e-15)
 
 
+def tight_cg(A: PETSc.Mat, comm: MPI.Comm) -> PETSc.KSP:
+    """A set-up CG (Jacobi, to 1e-14): a solver without a factor."""
+    ksp = PETSc.KSP().create(comm)
+    ksp.setOperators(A)
+    ksp.setType("cg")
+    ksp.getPC().setType("jacobi")
+    ksp.setTolerances(rtol=1e-14, atol=0.0)
+    ksp.setUp()
+    return ksp
+
+
 @pytest.mark.parametrize("solver", ["mumps", "cg"])
 def test_sparse_columns_are_the_dense_columns_on_those_rows(comm, solver):
     A = chain()  # SPD tridiagonal, 40 unknowns: every solution reaches every row
@@ -152,12 +163,7 @@ def test_sparse_columns_are_the_dense_columns_on_those_rows(comm, solver):
         ksp = create_ksp(A, "hfcdem_test_sparse_", DIRECT_LU)
         ksp.setUp()
     else:  # no factor to hand a sparse right-hand side: dense columns
-        ksp = PETSc.KSP().create(comm)
-        ksp.setOperators(A)
-        ksp.setType("cg")
-        ksp.getPC().setType("jacobi")
-        ksp.setTolerances(rtol=1e-14, atol=0.0)
-        ksp.setUp()
+        ksp = tight_cg(A, comm)
     lo, hi = A.getOwnershipRange()
     rows = np.array([3, 17, 18, 35])  # on both ranks' parts under mpirun -n 2
     values = np.arange(1.0, 1.0 + 4 * 3).reshape(4, 3)
@@ -189,12 +195,7 @@ def test_inverse_entries_are_the_dense_inverse_s_block(comm, solver):
         ksp = create_ksp(A, "hfcdem_test_inverse_", DIRECT_CHOLESKY)
         ksp.setUp()
     else:  # no MUMPS factor: the columns solved, their rows kept
-        ksp = PETSc.KSP().create(comm)
-        ksp.setOperators(A)
-        ksp.setType("cg")
-        ksp.getPC().setType("jacobi")
-        ksp.setTolerances(rtol=1e-14, atol=0.0)
-        ksp.setUp()
+        ksp = tight_cg(A, comm)
     n = A.getSize()[0]
     lo, hi = A.getOwnershipRange()
     dense = np.zeros((n, n))
