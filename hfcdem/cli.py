@@ -433,8 +433,8 @@ def _add_run(sub: Any) -> None:
     run.add_argument(
         "--resume",
         action="store_true",
-        help="continue a stopped run from its checkpoint (not a seepage or static run: "
-        "they keep none)",
+        help="continue a stopped run from its checkpoint (not a seepage pressure ramp or a "
+        "static run: they keep none)",
     )
     run.add_argument(
         "--check-time-step",
@@ -619,7 +619,7 @@ _WHOLE = "every output is written whole, so nothing written before is lost"
 #: what a user has after Ctrl-C, per command
 _AFTER_INTERRUPT = {
     "run": "the steps written so far stand (history.csv, checkpoint.json); continue with "
-    "--resume (a seepage run starts again)",
+    "--resume (a seepage pressure ramp starts again)",
     "study": "finished cases stand; run the same command again to go on (they are skipped)",
     "reproduce": "finished cases stand; run the same command again to go on (they are skipped)",
 }

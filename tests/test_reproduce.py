@@ -37,7 +37,7 @@ from hfcdem.reproduce.compare import (
     trend,
 )
 from hfcdem.reproduce.report import BEGIN, END, summary_table, update_readme
-from hfcdem.reproduce.runner import CaseRecord, case_status, run_reproduction
+from hfcdem.reproduce.runner import ROOT, CaseRecord, case_status, run_reproduction
 
 
 def _rows(path):
@@ -549,3 +549,30 @@ def test_time_left_scales_with_the_cases_done_once_a_minute_has_run():
     assert clock.remaining() == pytest.approx(600.0)  # twice as slow as estimated
     clock = _Clock(spent=900.0, estimated=90.0, left=[100.0])
     assert clock.remaining() == pytest.approx(300.0)  # at most 3x
+
+
+class _Interrupt(Exception):
+    pass
+
+
+def test_a_case_stopped_from_outside_goes_on_from_its_checkpoint(shared_tmp_path):
+    from hfcdem.workflows.observers import StepObserver
+    from hfcdem.workflows.run import run_scene
+
+    class StopAt(StepObserver):
+        def step(self, frac, rec):
+            if rec.time >= 2.0:
+                raise _Interrupt
+
+    out = shared_tmp_path / "stopped_report"
+    kgd = next(c for c in CASES if c.name == "kgd")
+    tier = kgd.tiers["quick"]
+    scene = load_scene(ROOT / kgd.source, tier.resolution, overrides=dict(tier.fixed))
+    with pytest.raises(_Interrupt):  # as a time limit would stop it
+        run_scene(scene, out / "cases" / "kgd", observers=[StopAt()])
+    (record,) = run_reproduction(out, tier="quick", only=["kgd"])
+    assert not record.skipped and record.status == "ok"
+    assert (out / "cases" / "kgd" / "fields_resumed.bp").is_dir()  # went on, not again
+    rows = {c.quantity: c for c in record.comparisons}
+    for quantity in ("half-length (fluid front)", "inlet net pressure", "inlet opening"):
+        assert rows[quantity].met is True, rows[quantity]  # as the straight run's rows

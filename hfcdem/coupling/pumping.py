@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -57,6 +57,7 @@ from mpi4py import MPI
 
 from hfcdem.config.materials import Fluid
 from hfcdem.coupling.breakdown import detect_breakdown
+from hfcdem.coupling.checkpoint import interface_rows, restore_interfaces
 from hfcdem.coupling.condense import cavity_vertices, mesh_cavity_volume
 from hfcdem.coupling.events import (
     check_small_displacement,
@@ -154,6 +155,49 @@ _GROWTH_LINEARITY = 0.1
 _GROWTH_WET = 0.01
 
 
+@dataclass
+class Course:
+    """Where a pumped run stands after a step: what a resumed run goes on from.
+
+    ``steps`` taken to ``t``; ``dt``: the next step's size (None: the scene's);
+    ``rate``: the cavity pressure's rate over the last step (Pa/s; None after a
+    break); ``first``: the first break's (cavity pressure, time, mode,
+    location); ``peak`` at ``peak_time``; ``curve_t``, ``curve_p``: the
+    pressure curve the breakdown is read from (each step's highest, then its
+    end); ``history`` and ``costs``: the rows of :class:`PumpingResult`.
+    """
+
+    t: float = 0.0
+    steps: int = 0
+    dt: float | None = None
+    rate: float | None = None
+    first: tuple[float, float, int, np.ndarray] | None = None
+    peak: float = 0.0
+    peak_time: float = 0.0
+    curve_t: list[float] = field(default_factory=list)
+    curve_p: list[float] = field(default_factory=list)
+    history: list[tuple[float, ...]] = field(default_factory=list)
+    costs: list[tuple[float, ...]] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Resume:
+    """A stopped pumped run to go on with: its last ``checkpoint`` and the rows of its files.
+
+    ``history`` and ``costs``: the rows of ``history.csv`` and
+    ``step_costs.csv`` up to the checkpoint's step (:class:`PumpingResult`).
+    """
+
+    checkpoint: Mapping[str, Any]
+    history: list[tuple[float, ...]]
+    costs: list[tuple[float, ...]]
+
+
+#: offered, after every step, a function that returns the run's checkpoint (collective: a
+#: taker must call it on every rank or on none)
+Checkpoint = Callable[[Callable[[], dict[str, Any]]], None]
+
+
 @dataclass(frozen=True)
 class PumpingResult:
     """What a pumped run with seepage found.
@@ -235,6 +279,8 @@ def pump_with_seepage(
     at_first_break: Callable[[float, np.ndarray], None] | None = None,
     contact_hysteresis: bool = True,
     records: Records | None = None,
+    checkpoint: Checkpoint | None = None,
+    resume: Resume | None = None,
 ) -> PumpingResult:
     """Pump into the ``cavity`` facet groups and follow breaks and pressure (collective).
 
@@ -256,7 +302,10 @@ def pump_with_seepage(
     that step's state.  ``contact_hysteresis``: see
     :meth:`~hfcdem.solid.states.InterfaceStates.switch_contacts`.  ``records``
     is called after every step with its history and cost rows (on every rank),
-    so that a run stopped from outside keeps what it did.
+    so that a run stopped from outside keeps what it did; ``checkpoint`` is
+    offered its state after every step (:meth:`_PumpedCavity.checkpoint`), from
+    which ``resume`` goes on (the same solid, excavated again; raises
+    ValueError for a checkpoint that does not fit it).
     """
     if not isinstance(aperture, JointAperture):
         aperture = JointAperture(aperture)  # checks it
@@ -275,7 +324,7 @@ def pump_with_seepage(
         why = f"the excavated rock is past the validity limit before pumping: {stop}"
         failures = settled_failures(solid, stop)
         return _stopped_before_pumping(pumping, failures, why, validity_limit=True)
-    if progress is not None and initial_failures:  # said before the pumping's lines
+    if progress is not None and initial_failures and resume is None:  # before the steps' lines
         progress(f"initial state: {initial_failures} interfaces fail before pumping")
     try:
         run = _PumpedCavity(
@@ -285,8 +334,20 @@ def pump_with_seepage(
         why = f"the excavated rock is past the validity limit before pumping: {stop}"
         return _stopped_before_pumping(pumping, initial_failures, why, validity_limit=True)
     try:
+        course = None
+        if resume is not None:  # the excavated state stays the volumes' reference
+            course = run.resume(resume.checkpoint)
+            course.history, course.costs = list(resume.history), list(resume.costs)
+            initial_failures = int(resume.checkpoint["initial_failures"])
         return run.run(
-            initial_failures, progress, max_state_iterations, frames, at_first_break, records
+            initial_failures,
+            progress,
+            max_state_iterations,
+            frames,
+            at_first_break,
+            records,
+            course,
+            checkpoint,
         )
     finally:
         run.seep.destroy()
@@ -842,33 +903,36 @@ class _PumpedCavity:
         frames: Frames | None = None,
         at_first_break: Callable[[float, np.ndarray], None] | None = None,
         records: Records | None = None,
+        course: Course | None = None,
+        checkpoint: Checkpoint | None = None,
     ) -> PumpingResult:
-        """Pump for the whole duration; return the result."""
+        """Pump for the whole duration, or on from ``course`` (a resume); return the result.
+
+        ``checkpoint`` is offered the run's state after every step (:meth:`checkpoint`).
+        """
         solid, pumping = self.solid, self.pumping
-        t, n = 0.0, 0
-        history: list[tuple[float, ...]] = []
-        costs: list[tuple[float, ...]] = []
-        first: tuple[float, float, int, np.ndarray] | None = None
-        peak, peak_time, stopped, limit = self.p, 0.0, None, False
-        # the pressure curve the breakdown is read from: each step's highest, then its end
-        curve_t, curve_p = [0.0], [self.p]
+        c = course if course is not None else Course(peak=self.p, curve_t=[0.0], curve_p=[self.p])
+        stopped, limit = None, False
         cadence = Cadence(pumping.steps, solid.comm)
         if frames is not None:
-            frames(t, *self.fields())
+            frames(c.t, *self.fields())
         stepper = StepController(
             dt=pumping.dt, dt_min=pumping.dt, dt_max=max(pumping.max_dt or 0.0, pumping.dt)
         )
-        rate: float | None = None  # the cavity pressure's rate over the last step (Pa/s)
+        if c.dt is not None:
+            stepper.retry_with(c.dt)
         wet = self._wet_share()
         started = time.perf_counter()
-        pace = TimeLeft(pumping.duration, t)
-        while t < pumping.duration * (1.0 - 1e-12):
-            stepper.limit(pumping.duration - t)
+        pace = TimeLeft(pumping.duration, c.t)
+        while c.t < pumping.duration * (1.0 - 1e-12):
+            if pumping.until_first_break and c.first is not None:  # a resumed run's
+                break
+            stepper.limit(pumping.duration - c.t)
             tried, p_before, wet_before = stepper.dt, self.p, wet
             before = (solid.solves, self.rebalances, *self._factorisations(), time.perf_counter())
             start = self.save_step()
             try:
-                dt, broken, worst, top = self.step(t, tried, max_iterations, start)
+                dt, broken, worst, top = self.step(c.t, tried, max_iterations, start)
             except _Unsettled as stop:
                 # states or a balance that did not settle may settle over a shorter step
                 if tried > pumping.dt / 2**_SETTLE_HALVINGS * (1.0 + 1e-9):
@@ -876,7 +940,7 @@ class _PumpedCavity:
                     stepper.retry_with(tried / 2.0)
                     self.unsettled_retries += 1
                     if progress is not None:
-                        progress(f"  t {t:.4g} s: {stop}; the step again at {tried / 2.0:.3g} s")
+                        progress(f"  t {c.t:.4g} s: {stop}; the step again at {tried / 2.0:.3g} s")
                     continue
                 stopped = (
                     f"{stop}, with steps halved down to {tried:.3g} s (at most "
@@ -889,13 +953,14 @@ class _PumpedCavity:
             except ValidityLimit as stop:
                 stopped, limit = str(stop), True
                 break
-            t, n = t + dt, n + 1
+            t = c.t = c.t + dt
+            c.steps += 1
             pace.add(t, time.perf_counter() - started)
-            change, last_rate = self.p - p_before, rate
-            rate, wet = change / dt, self._wet_share()
+            change, last_rate = self.p - p_before, c.rate
+            c.rate, wet = change / dt, self._wet_share()
             if broken or dt < tried:
                 stepper.retry_with(pumping.dt)  # breaks come in cascades: the base step again
-                rate = None
+                c.rate = None
             elif last_rate is not None:
                 off = abs(change - last_rate * dt)  # from the last step's rate carried on
                 linear = off <= _GROWTH_LINEARITY * max(abs(change), 1e-3 * max(p_before, 1e6))
@@ -903,16 +968,17 @@ class _PumpedCavity:
                     stepper.accepted(dt, changed=False, newton_iterations=0)
                 else:
                     stepper.retry_with(max(dt / stepper.growth, pumping.dt))
+            c.dt = stepper.dt
             events = self._factorisations()
-            costs.append(
+            c.costs.append(
                 (t, dt, broken, solid.solves - before[0], events[0] - before[2],
                  events[1] - before[3], self.rebalances - before[1], events[2] - before[4],
                  events[3] - before[5], time.perf_counter() - before[6])
             )  # fmt: skip
             if frames is not None:
                 frames(t, *self.fields())
-            if worst is not None and first is None:
-                first = (worst[0], t, worst[1], worst[2])
+            if worst is not None and c.first is None:
+                c.first = (worst[0], t, worst[1], worst[2])
                 if at_first_break is not None:
                     at_first_break(t, worst[3])
             held = self.volume * (1.0 + self.p / self.kw) + self.joint_content()
@@ -920,19 +986,21 @@ class _PumpedCavity:
             self.worst = max(self.worst, error)
             counts = solid.broken_counts()
             crack = self.crack_volume
-            history.append(
+            c.history.append(
                 (t, self.p, self.joint_content(), crack, counts["tensile"], counts["shear"], wet)
             )
             if records is not None:
-                records(history[-1], costs[-1])
-            if top > peak:
-                peak, peak_time = top, t
+                records(c.history[-1], c.costs[-1])
+            if top > c.peak:
+                c.peak, c.peak_time = top, t
             if top > self.p:
-                curve_t.append(t)
-                curve_p.append(top)
-            curve_t.append(t)
-            curve_p.append(self.p)
-            if pumping.until_first_break and first is not None:
+                c.curve_t.append(t)
+                c.curve_p.append(top)
+            c.curve_t.append(t)
+            c.curve_p.append(self.p)
+            if checkpoint is not None:
+                checkpoint(lambda: self.checkpoint(c, initial_failures))
+            if pumping.until_first_break and c.first is not None:
                 if progress is not None:
                     progress(f"  t {t:.4g} s: the first break; the run ends here (until)")
                 break
@@ -940,7 +1008,7 @@ class _PumpedCavity:
                 for news in self.debris_news:
                     progress(news)
             self.debris_news.clear()
-            if progress is not None and cadence.due(n, bool(broken)):
+            if progress is not None and cadence.due(c.steps, bool(broken)):
                 progress(
                     f"  t {t:.4g} s, cavity {self.p / 1e6:.4g} MPa, {counts['tensile']} tensile "
                     f"{counts['shear']} shear, joints holding pressure {wet:.1%}, "
@@ -948,11 +1016,12 @@ class _PumpedCavity:
                 )
         counts = solid.broken_counts()
         pj, sat = self.fields()
+        first = c.first
         # a fall before the first break is the joints' intake, not a breakdown; a run
         # ended on its first break seeks none
         ended = pumping.until_first_break and first is not None
         breakdown = detect_breakdown(
-            curve_t, curve_p, not_before=math.inf if first is None or ended else first[1]
+            c.curve_t, c.curve_p, not_before=math.inf if first is None or ended else first[1]
         )
         return PumpingResult(
             first_pressure=None if first is None else first[0],
@@ -962,12 +1031,12 @@ class _PumpedCavity:
             breakdown=None if breakdown is None else breakdown.pressure,
             breakdown_time=None if breakdown is None else breakdown.time,
             breakdown_drop=None if breakdown is None else breakdown.drop,
-            peak_pressure=peak,
-            peak_time=peak_time,
-            peak_cut_off=breakdown is None and peak_time > 0.0 and not ended,
+            peak_pressure=c.peak,
+            peak_time=c.peak_time,
+            peak_cut_off=breakdown is None and c.peak_time > 0.0 and not ended,
             initial_failures=initial_failures,
-            steps=n,
-            history=history,
+            steps=c.steps,
+            history=c.history,
             max_mass_error=self.worst,
             joint_pressure=pj,
             saturation=sat,
@@ -982,8 +1051,114 @@ class _PumpedCavity:
             solid_solves=solid.solves - self.solves_before,
             factorisations=self._factorisations()[0] - self.factorisations_before[0],
             low_rank_events=self._factorisations()[1] - self.factorisations_before[1],
-            costs=costs,
+            costs=c.costs,
             ended_on_first_break=ended,
+        )
+
+    # ------------------------------------------------------------- resume
+
+    def checkpoint(self, course: Course, initial_failures: int) -> dict[str, Any]:
+        """Return the run's state after a step, JSON-ready and the same on every rank (collective).
+
+        The interface states (keyed by global vertex ids, as every checkpoint's),
+        the joints' fluid by network facet, the cavity's pressure and counters,
+        and ``course`` but its history and cost rows (those are in the run's
+        files).  :meth:`resume` continues from it on any number of ranks.
+        """
+        solid, c = self.solid, course
+        first = None
+        if c.first is not None:
+            p, t, mode, location = c.first
+            where = [float(x) for x in location]
+            first = {"pressure": p, "time": t, "mode": int(mode), "location": where}
+        counts = self._factorisations()
+        return {
+            "t": c.t,
+            "steps": c.steps,
+            "dt": c.dt,
+            "rate": c.rate,
+            "first": first,
+            "peak": c.peak,
+            "peak_time": c.peak_time,
+            "curve_t": list(c.curve_t),
+            "curve_p": list(c.curve_p),
+            "initial_failures": initial_failures,
+            "cavity": {
+                "p": self.p,
+                "m0": self.m0,
+                "worst": self.worst,
+                "debris_cells": self.debris_cells,
+                "rebalances": self.rebalances,
+                "secant_balances": self.secant_balances,
+                "unsettled_retries": self.unsettled_retries,
+                "solid_solves": solid.solves - self.solves_before,
+                "factorisations": counts[0] - self.factorisations_before[0],
+                "low_rank_events": counts[1] - self.factorisations_before[1],
+            },
+            "interfaces": interface_rows(solid),
+            "joints": {"keys": self.net.keys.reshape(-1).tolist(), "q": self.seep.save().tolist()},
+        }
+
+    def resume(self, data: Mapping[str, Any]) -> Course:
+        """Take the state of a :meth:`checkpoint`; return its course, without rows (collective).
+
+        Raises ValueError when the checkpoint's joints are not those its
+        interface states give on this mesh.  The solid is solved at the
+        restored state (a new factorisation); the counters go on from the
+        checkpoint's.
+        """
+        solid, cav = self.solid, data["cavity"]
+        t = float(data["t"])
+        restore_interfaces(solid, data["interfaces"])
+        self.release_debris(t)  # the cells a supporting wall holds are found again
+        self.debris_news.clear()
+        self.debris_cells = int(cav["debris_cells"])
+        self.cracks = self._joined_cracks()
+        self.seep.destroy()
+        self.facets, self.net, self.positions, self.seep = self._network(None, None)
+        keys = np.asarray(data["joints"]["keys"], dtype=np.int64)
+        keys = keys.reshape(-1, self.net.keys.shape[1])
+        where = self.net.positions(keys)
+        if keys.shape[0] != self.net.size or np.any(where < 0):
+            raise ValueError(
+                f"the checkpoint holds {keys.shape[0]} joints, not the {self.net.size} of "
+                "its interface states on this mesh"
+            )
+        q = np.empty(self.net.size)
+        q[where] = np.asarray(data["joints"]["q"], dtype=float)
+        self.seep.restore(q)
+        self.p, self.m0, self.worst = float(cav["p"]), float(cav["m0"]), float(cav["worst"])
+        self.rebalances = int(cav["rebalances"])
+        self.secant_balances = int(cav["secant_balances"])
+        self.unsettled_retries = int(cav["unsettled_retries"])
+        self._last_balance = None
+        self.resolve(self.loads(self.p, self.seep.pressure), t)
+        self.solves_before = solid.solves - int(cav["solid_solves"])
+        counts = self._factorisations()
+        self.factorisations_before = (
+            counts[0] - int(cav["factorisations"]),
+            counts[1] - int(cav["low_rank_events"]),
+            counts[2],
+            counts[3],
+        )
+        first = data["first"]
+        return Course(
+            t=t,
+            steps=int(data["steps"]),
+            dt=None if data["dt"] is None else float(data["dt"]),
+            rate=None if data["rate"] is None else float(data["rate"]),
+            first=None
+            if first is None
+            else (
+                float(first["pressure"]),
+                float(first["time"]),
+                int(first["mode"]),
+                np.asarray(first["location"], dtype=float),
+            ),
+            peak=float(data["peak"]),
+            peak_time=float(data["peak_time"]),
+            curve_t=[float(x) for x in data["curve_t"]],
+            curve_p=[float(x) for x in data["curve_p"]],
         )
 
 

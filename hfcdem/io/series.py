@@ -106,15 +106,29 @@ class InterfaceFrames:
     :meth:`offer` writes the first state offered and then the first at or
     after each time ``k * interval`` (and ``t_end``); each frame is written
     atomically and the PVD rewritten after it, so a stopped run keeps its
-    frames.  Collective.
+    frames.  ``resume_from``: the simulated time a resumed run starts at; the
+    frames listed up to it are kept and the next is due at the next output
+    time after it.  Collective.
     """
 
-    def __init__(self, out: Path, stem: str, t_end: float, interval: float, comm: Any) -> None:
+    def __init__(
+        self,
+        out: Path,
+        stem: str,
+        t_end: float,
+        interval: float,
+        comm: Any,
+        resume_from: float | None = None,
+    ) -> None:
         if not (interval > 0.0):
             raise ValueError(f"output interval must be a positive time (s), got {interval!r}")
-        self._frames = PvdFrames(out, stem, comm)
-        self._times = iter(output_times(0.0, t_end, interval))
-        self.due = 0.0
+        kept = None
+        if resume_from is not None:
+            listed = read_pvd(out / f"{stem}.pvd") if comm.rank == 0 else []
+            kept = comm.bcast([f for f in listed if f[0] <= resume_from * (1.0 + 1e-12)], root=0)
+        self._frames = PvdFrames(out, stem, comm, kept)
+        self._times = iter(output_times(resume_from or 0.0, t_end, interval))
+        self.due = 0.0 if resume_from is None else next(self._times, math.inf)
 
     @property
     def frames(self) -> list[tuple[float, str]]:

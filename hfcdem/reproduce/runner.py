@@ -341,7 +341,13 @@ def _execute(
     from hfcdem.workflows.convergence import run_convergence as converge
     from hfcdem.workflows.memory import release_memory
     from hfcdem.workflows.run import run_scene, scene_fingerprint
-    from hfcdem.workflows.study import case_done, case_rows, load_study, run_study
+    from hfcdem.workflows.study import (
+        case_done,
+        case_rows,
+        case_stopped,
+        load_study,
+        run_study,
+    )
 
     assert case.source is not None
     path = ROOT / case.source
@@ -354,7 +360,14 @@ def _execute(
         if skipped:
             summary = json.loads((where / "summary.json").read_text())
         else:
-            summary = run_scene(scene, where, comm, force=True, say=say)
+            # a case stopped from outside goes on from its checkpoint (read on rank 0)
+            fingerprint = scene_fingerprint(scene)
+            stopped = comm.bcast(
+                case_stopped(where, fingerprint) if comm.rank == 0 else None, root=0
+            )
+            summary = run_scene(
+                scene, where, comm, force=True, say=say, resume=bool(stopped and not force)
+            )
             release_memory()
         text = _size_text(characteristic_size(scene), resolution, summary.get("cells"))
         return CaseResult(where, (scene,), summary=summary), text, skipped

@@ -43,6 +43,7 @@ from hfcdem.coupling.hydrofrac import (
     SimulationStopped,
     StepRecord,
 )
+from hfcdem.coupling.penetration import PressureRamp
 from hfcdem.info import versions
 from hfcdem.io.files import prepare_output_dir, to_builtin, write_interfaces, write_json
 from hfcdem.io.history import HistoryFile
@@ -68,6 +69,7 @@ from hfcdem.workflows.places import (
     stress_along_tunnels,
     wellbore_place,
 )
+from hfcdem.workflows.pumped_checkpoint import KIND as SEEPAGE_CHECKPOINT
 from hfcdem.workflows.wall_stress import in_situ_wall_tension, wall_tension_warning
 
 ROLLER_AXES = {"symmetry_x": 0, "symmetry_y": 1, "symmetry_z": 2}
@@ -291,23 +293,26 @@ def run_scene(
             "the scene states no physics: add [rock], [stress] and [injection] (or [load]) "
             "sections",
         )
-    if resume and (scene.physics.load is not None or scene.physics.wall_joints == "seepage"):
+    loading = None
+    if scene.physics.load is None and scene.physics.wall_joints == "seepage":
+        from hfcdem.workflows.seepage_ramp import seepage_loading
+
+        with in_scene_file(scene):
+            # its checks, before an earlier run's files are touched
+            loading = seepage_loading(scene)
+    if resume and (scene.physics.load is not None or isinstance(loading, PressureRamp)):
         # checked before anything is written: the stopped run's files must survive
         what = (
             "a static [load] scene"
             if scene.physics.load is not None
-            else 'a seepage run (injection.wall_joints = "seepage": a pressure ramp or pumping)'
+            else 'a seepage pressure ramp (injection.wall_joints = "seepage", ended at its '
+            "first break)"
         )
         raise SceneError(
             "",
             f"--resume: {what} keeps no checkpoint to continue from; run it again "
             "without --resume (into another -o, or with --force to replace its results)",
         )
-    if scene.physics.load is None and scene.physics.wall_joints == "seepage":
-        from hfcdem.workflows.seepage_ramp import seepage_loading
-
-        with in_scene_file(scene):
-            seepage_loading(scene)  # its checks, before an earlier run's files are touched
     say = say or (lambda msg: None)
     wall0 = time.perf_counter()
     own_peak = comm.allreduce(reset_peak_memory(), op=MPI.LAND)  # the peak is this run's
@@ -327,6 +332,7 @@ def run_scene(
         _write_run_record(out, scene, comm)
         if comm.rank == 0:  # another run's answers must not pass for this one's
             (out / "summary.json").unlink(missing_ok=True)
+            (out / "checkpoint.json").unlink(missing_ok=True)  # an earlier run's state
             (out / "time_step_check.json").unlink(missing_ok=True)  # of an earlier run
         comm.barrier()
     cells = tmesh.mesh.topology.index_map(tmesh.mesh.topology.dim).size_global
@@ -368,7 +374,11 @@ def run_scene(
 
             cavity = pressurised_groups(tmesh.facet_names, phys.wellbore)
             supports = supporting_walls(tmesh.facet_names, cavity, phys.wellbore)
-            summary = run_seepage_ramp(scene, solid, cavity, out, say, record, supports)
+            summary = run_seepage_ramp(
+                scene, solid, cavity, out, say, record, supports, resume=resume
+            )
+            if resume:
+                _write_run_record(out, scene, comm)  # as a coupled run's: once it went on
         else:
             summary = _run_coupled(scene, solid, out, say, record, resume, observers)
         collective = True
@@ -579,6 +589,12 @@ def _resume(
     if data is None:
         say("nothing to resume: no checkpoint.json; starting from t = 0")
         return
+    if data.get("kind") == SEEPAGE_CHECKPOINT:
+        raise SceneError(
+            "",
+            f"{checkpoint} is a pumped seepage run's: resume the scene that wrote it, or "
+            "start again with --force",
+        )
     if data.get("mesh") != fingerprint:
         raise SceneError(
             "",

@@ -48,12 +48,14 @@ from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import InterfaceFrames
 from hfcdem.solid.cdem import CDEMSolid
 from hfcdem.solid.interfaces import FacetState
+from hfcdem.workflows.observers import mesh_fingerprint
 from hfcdem.workflows.places import (
     place_ratios,
     plot_first_crack_stress,
     stress_along_tunnels,
     wellbore_place,
 )
+from hfcdem.workflows.pumped_checkpoint import CheckpointFile, earlier_run
 
 #: the columns of a pumped run's ``history.csv``, one row per step
 PUMPED_COLUMNS = (
@@ -152,10 +154,13 @@ def run_seepage_ramp(
     say: Callable[[str], None],
     record: Callable[[], dict[str, Any]],
     supports: tuple[str, ...] = (),
+    resume: bool = False,
 ) -> dict[str, Any]:
     """Run the ramp of a seepage scene on ``solid`` and write its results into ``out``.
 
-    ``supports``: walls that hold the blocks cut loose against them (a pumped run).
+    ``supports``: walls that hold the blocks cut loose against them (a pumped run);
+    ``resume``: a pumped run goes on from the checkpoint of a stopped one in ``out``
+    (:mod:`hfcdem.workflows.pumped_checkpoint`).
     """
     phys, comm = scene.physics, solid.comm
     ramp = seepage_loading(scene)
@@ -185,7 +190,7 @@ def run_seepage_ramp(
         )
     )
     if isinstance(ramp, CavityPumping):
-        return _run_pumped(scene, solid, (cavity, supports), ramp, out, say, record)
+        return _run_pumped(scene, solid, (cavity, supports), ramp, out, say, record, resume)
     result = ramp_breakdown(solid, cavity, phys.fluid, phys.joints, ramp, progress=say)
     if result.stopped:
         say(f"stopped: {result.stopped}")
@@ -304,19 +309,26 @@ def _run_pumped(
     out: Path,
     say: Callable[[str], None],
     record: Callable[[], dict[str, Any]],
+    resume: bool = False,
 ) -> dict[str, Any]:
     """Pump for the scene's duration past the first break; write the results into ``out``.
 
-    ``walls``: the cavity's wall groups and the supporting ones.
+    ``walls``: the cavity's wall groups and the supporting ones; ``resume``: go
+    on from the checkpoint of a stopped run in ``out``.
     """
     (cavity, supports), phys, comm = walls, scene.physics, solid.comm
+    fingerprint = mesh_fingerprint(solid.tmesh)
+    earlier = earlier_run(out, fingerprint, PUMPED_COLUMNS, say, comm) if resume else None
     interval = phys.output_interval or pumping.duration / 20.0
-    series = InterfaceFrames(out, "joints", pumping.duration, interval, comm)
+    since = None if earlier is None else float(earlier.checkpoint["t"])
+    series = InterfaceFrames(out, "joints", pumping.duration, interval, comm, resume_from=since)
 
     def frame(t: float, pressure: np.ndarray, saturation: np.ndarray) -> None:
         series.offer(t, *_joint_fields(solid, pressure, saturation))
 
-    stress: dict[str, Any] = {}
+    # measured at the first break: kept in the checkpoint for a resumed run's summary
+    stress: dict[str, Any] = {} if earlier is None else dict(earlier.checkpoint["workflow"])
+    checkpoints = CheckpointFile(out / "checkpoint.json", fingerprint, stress, comm)
 
     def at_first_break(t: float, ratio: np.ndarray) -> None:
         ratios = place_ratios(scene, solid.midpoints, ratio, comm)
@@ -326,13 +338,24 @@ def _run_pumped(
         if profile:
             stress.update(time_s=t, sigma_xx=profile)
 
-    # written step by step, so that a run stopped from outside keeps its history
+    # written step by step, so that a run stopped from outside keeps its history; a resumed
+    # run's files keep the rows up to its checkpoint, replaced only at its first new step
     history = HistoryFile(out / "history.csv", PUMPED_COLUMNS, comm)
     step_costs = HistoryFile(out / "step_costs.csv", COST_COLUMNS, comm)
-    history.start()
-    step_costs.start()
+    kept = ([], []) if earlier is None else (earlier.history, earlier.costs)
+    pending = [True]
+
+    def start_files() -> None:
+        history.start([dict(zip(PUMPED_COLUMNS, row, strict=True)) for row in kept[0]])
+        step_costs.start([dict(zip(COST_COLUMNS, row, strict=True)) for row in kept[1]])
+        pending[0] = False
+
+    if earlier is None:
+        start_files()
 
     def records(row: tuple[float, ...], cost: tuple[float, ...]) -> None:
+        if pending[0]:
+            start_files()
         history.append(dict(zip(PUMPED_COLUMNS, row, strict=True)))
         step_costs.append(dict(zip(COST_COLUMNS, cost, strict=True)))
 
@@ -348,6 +371,8 @@ def _run_pumped(
         at_first_break=at_first_break,
         contact_hysteresis=phys.solver.contact_hysteresis,
         records=records,
+        checkpoint=checkpoints.offer,
+        resume=earlier,
     )
     if result.stopped:
         say(f"stopped: {result.stopped}")

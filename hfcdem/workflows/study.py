@@ -359,10 +359,15 @@ def run_cases(
                 continue
             scene = study.case_scene(k)
             case_dir = out / case_directory(k, study.values[k])
-            if case_done(case_dir, scene_fingerprint(scene), keep_stopped) and not force:
+            fingerprint = scene_fingerprint(scene)
+            if case_done(case_dir, fingerprint, keep_stopped) and not force:
                 if sub.rank == 0:
                     print(f"case {k}: done before, skipped", flush=True)
                 continue
+            # a case stopped from outside goes on from its checkpoint
+            resume = not force and sub.bcast(
+                case_stopped(case_dir, fingerprint) if sub.rank == 0 else None, root=0
+            )
             label = f"case {k}: {study.parameter} = {study.values[k]}"
             if sub.rank == 0:
                 print(label, flush=True)
@@ -371,7 +376,7 @@ def run_cases(
                 if sub.rank == 0:
                     print(f"  [{lab}] {msg}", flush=True)
 
-            run_scene(scene, case_dir, sub, force=True, say=progress)
+            run_scene(scene, case_dir, sub, force=True, say=progress, resume=bool(resume))
             release_memory()  # else the next, larger case grows past this one's freed heap
     finally:
         sub.Free()
@@ -408,6 +413,23 @@ def case_done(case_dir: Path, fingerprint: str, keep_stopped: bool = False) -> b
         run.get("fingerprint") == fingerprint
         and summary.get("fingerprint", fingerprint) == fingerprint
         and (keep_stopped or summary.get("stopped") is None)
+    )
+
+
+def case_stopped(case_dir: Path, fingerprint: str) -> bool:
+    """Whether ``case_dir`` holds a run of the scene with ``fingerprint`` stopped from outside.
+
+    A run with ``checkpoint.json`` and no ``summary.json`` (Ctrl-C, a time
+    limit): ``hfcdem run --resume`` goes on from it.
+    """
+    try:
+        run = json.loads((case_dir / "run.json").read_text())
+    except (OSError, json.JSONDecodeError):
+        return False
+    return (
+        run.get("fingerprint") == fingerprint
+        and (case_dir / "checkpoint.json").is_file()
+        and not (case_dir / "summary.json").exists()
     )
 
 
