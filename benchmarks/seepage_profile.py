@@ -130,6 +130,7 @@ def main() -> None:
         ("joint network rebuilt after breaks", r"pumping\.py:\d+\(_network\)"),
         ("debris search (loose blocks)", r"fragments\.py:\d+\(debris\)"),
         ("form compilation (ffcx)", r"jit\.py:\d+\(ffcx_jit\)"),
+        ("checkpoints offered (built, written)", r"pumped_checkpoint\.py:\d+\(offer\)"),
     ]
     for label, pattern in parts:
         cum, calls = _cumulative(stats, pattern)
