@@ -576,3 +576,17 @@ def test_a_case_stopped_from_outside_goes_on_from_its_checkpoint(shared_tmp_path
     rows = {c.quantity: c for c in record.comparisons}
     for quantity in ("half-length (fluid front)", "inlet net pressure", "inlet opening"):
         assert rows[quantity].met is True, rows[quantity]  # as the straight run's rows
+
+
+def test_a_case_at_another_resolution_than_its_tiers_gets_no_estimate(shared_tmp_path):
+    said = []
+    out = shared_tmp_path / "griffith_default"
+    (record,) = run_reproduction(out, only=["griffith"], resolution="default", say=said.append)
+    assert record.status == "ok" and record.resolution.startswith("default")
+    # the quick tier's 1 s is for its coarse mesh: not said of the default one
+    (line,) = [m for m in said if m.startswith("[1/1] griffith: Griffith")]
+    assert line.endswith("(no estimate at this resolution: the tier's is for its own mesh)")
+    said.clear()
+    run_reproduction(out, only=["griffith"], resolution="default", say=said.append)
+    (line,) = [m for m in said if m.startswith("[1/1] griffith: Griffith")]
+    assert "(about " in line  # its own wall time, now that it has run here

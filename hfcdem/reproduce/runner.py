@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -133,7 +134,7 @@ def _run_all(
         _check_resolution(cases, resolution)
     out = prepare_output_dir(output, comm)
     commit = run_tag(comm)["commit"]  # the code this process runs, not HEAD at the end
-    clock = _Clock(left=[_estimate(c, c.tiers[tier], out, comm.size) for c in cases])
+    clock = _Clock(left=[_estimate(c, c.tiers[tier], out, comm.size, resolution) for c in cases])
     records = []
     others = [c for c in select_cases(tier) if c not in cases] if only else []
     for case in others:
@@ -157,14 +158,11 @@ def _run_all(
         est = clock.left.pop(0)
         where = out / "cases" / case.name
         watchdog.beat(f"case {case.name} ({where})")
-        say(
-            f"[{i}/{len(cases)}] {case.name}: {case.title} (about {_minutes(est)}; "
-            f"about {_minutes(clock.remaining() + est)} left in all)"
-        )
+        say(f"[{i}/{len(cases)}] {case.name}: {case.title} ({_time_left(est, clock)})")
         t0 = time.perf_counter()
         record = _run_case(case, case.tiers[tier], where, comm, fidelity, resolution, force, say)
         spent = time.perf_counter() - t0
-        if record.status in ("ok", "limit") and not record.skipped:
+        if record.status in ("ok", "limit") and not record.skipped and math.isfinite(est):
             clock.spent += spent
             clock.estimated += est
         record = _finish(record, where, out, spent, comm, commit)
@@ -216,13 +214,39 @@ def _minutes(seconds: float) -> str:
     return f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.0f} min"
 
 
-def _estimate(case: Case, tier: Tier, out: Path, ranks: int) -> float:
-    """Return the case's last wall time here, else its tier's one-rank estimate."""
+def _time_left(est: float, clock: _Clock) -> str:
+    """Say a case's estimate and the whole run's (nan: none known at this resolution)."""
+    rest = clock.remaining()
+    if math.isfinite(est):
+        whole = (
+            f"about {_minutes(rest + est)} left in all"
+            if math.isfinite(rest)
+            else "no estimate for the others at this resolution"
+        )
+        return f"about {_minutes(est)}; {whole}"
+    said = "no estimate at this resolution: the tier's is for its own mesh"
+    if clock.left and math.isfinite(rest):
+        said += f"; about {_minutes(rest)} for the others"
+    return said
+
+
+def _estimate(
+    case: Case, tier: Tier, out: Path, ranks: int, resolution: str | None = None
+) -> float:
+    """Return the case's last wall time here, else its tier's one-rank estimate.
+
+    nan when ``resolution`` (a ``--resolution``) is not the tier's and the case
+    has not run here: a finer mesh costs hours where the tier's takes minutes.
+    """
     try:
         data = json.loads((out / "cases" / case.name / "case.json").read_text())
         return float(data["wall_time_s"])
     except (OSError, ValueError, KeyError):
-        return tier.estimate_s / max(1.0, 0.7 * ranks) if case.kind != "missing" else 0.0
+        if case.kind == "missing":
+            return 0.0
+        if resolution is not None and resolution != (tier.resolution or "default"):
+            return math.nan
+        return tier.estimate_s / max(1.0, 0.7 * ranks)
 
 
 def _overrides(fidelity: str) -> dict[str, Any]:
