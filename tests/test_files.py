@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from mpi4py import MPI
 
-from hfcdem.io.files import prepare_output_dir, write_atomic, write_csv, write_json
+from hfcdem.io.files import prepare_output_dir, read_json, write_atomic, write_csv, write_json
 
 
 def test_json_and_csv_round_trip(shared_tmp_path):
@@ -45,3 +45,16 @@ def test_unwritable_output_dir_is_a_clear_error(tmp_path):
     (tmp_path / "file").write_text("x")
     with pytest.raises(OSError, match="cannot create output directory"):
         prepare_output_dir(tmp_path / "file" / "sub", MPI.COMM_SELF)
+
+
+def test_read_json_is_rank_0s_on_every_rank_and_fails_on_every_rank(shared_tmp_path):
+    comm = MPI.COMM_WORLD
+    path = shared_tmp_path / "state.json"
+    assert read_json(path, comm) is None  # no such file
+    write_json(path, {"steps": 3}, comm)
+    assert read_json(path, comm) == {"steps": 3}
+    if comm.rank == 0:
+        path.write_text('{"steps": ')  # cut short
+    comm.barrier()
+    with pytest.raises(ValueError, match=r"state\.json cannot be read"):
+        read_json(path, comm)  # on every rank: none is left waiting

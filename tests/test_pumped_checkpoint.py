@@ -133,6 +133,11 @@ def test_a_resume_refuses_what_it_cannot_go_on_from(shared_tmp_path):
     MPI.COMM_WORLD.barrier()
     with pytest.raises(SceneError, match="not a pumped seepage run's checkpoint"):
         run_scene(scene, out, resume=True)
+    if MPI.COMM_WORLD.rank == 0:  # cut short: read on rank 0, refused on every rank
+        (out / "checkpoint.json").write_text(before["checkpoint.json"][:1000])
+    MPI.COMM_WORLD.barrier()
+    with pytest.raises(SceneError, match=r"checkpoint\.json cannot be read: .*--force"):
+        run_scene(scene, out, resume=True)
     if MPI.COMM_WORLD.rank == 0:  # a history shorter than the checkpoint's steps
         lines = before["history.csv"].splitlines(keepends=True)
         (out / "checkpoint.json").write_text(before["checkpoint.json"])

@@ -1118,7 +1118,7 @@ class _PumpedCavity:
         self.facets, self.net, self.positions, self.seep = self._network(None, None)
         keys = np.asarray(data["joints"]["keys"], dtype=np.int64)
         keys = keys.reshape(-1, self.net.keys.shape[1])
-        where = self.net.positions(keys)
+        where = self.net.positions(keys) if keys.size and self.net.size else np.zeros(0, int)
         if keys.shape[0] != self.net.size or np.any(where < 0):
             raise ValueError(
                 f"the checkpoint holds {keys.shape[0]} joints, not the {self.net.size} of "

@@ -116,6 +116,25 @@ def write_json(
     comm.barrier()
 
 
+def read_json(path: str | os.PathLike[str], comm: MPI.Comm = MPI.COMM_WORLD) -> Any:
+    """Return the JSON in ``path`` read on rank 0, on every rank (None: no such file).
+
+    A file that cannot be read or parsed raises ValueError on every rank, so
+    that no rank waits for one that failed.
+    """
+    data, problem = None, None
+    if comm.rank == 0 and os.path.exists(path):
+        try:
+            with open(path) as fh:
+                data = json.load(fh)
+        except (OSError, json.JSONDecodeError) as exc:
+            problem = f"{path} cannot be read: {exc}"
+    data, problem = comm.bcast((data, problem), root=0)
+    if problem is not None:
+        raise ValueError(problem)
+    return data
+
+
 def write_csv(
     path: str | os.PathLike[str],
     header: Sequence[str],
@@ -265,6 +284,7 @@ __all__ = [
     "Results",
     "atomic_path",
     "prepare_output_dir",
+    "read_json",
     "read_results",
     "write_atomic",
     "write_csv",

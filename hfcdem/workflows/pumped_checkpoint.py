@@ -27,7 +27,7 @@ from mpi4py import MPI
 
 from hfcdem.config.tables import SceneError
 from hfcdem.coupling.pumping import COST_COLUMNS, Resume
-from hfcdem.io.files import to_builtin, write_atomic
+from hfcdem.io.files import read_json, to_builtin, write_atomic
 from hfcdem.io.history import HistoryFile
 
 #: what the checkpoint says it is: a hydraulic-fracture run's checkpoint has no ``kind``
@@ -84,11 +84,14 @@ def earlier_run(
     and for step files shorter than the checkpoint; nothing is written.
     """
     path = out / "checkpoint.json"
-    if not _exists(path, comm):
+    try:
+        data = read_json(path, comm)
+    except ValueError as exc:
+        raise SceneError("", f"{exc}; start again with --force") from None
+    if data is None:
         say("nothing to resume: no checkpoint.json; starting from t = 0")
         return None
-    data = comm.bcast(json.loads(path.read_text()) if comm.rank == 0 else None, root=0)
-    if data.get("kind") != KIND:
+    if not isinstance(data, dict) or data.get("kind") != KIND:
         raise SceneError(
             "",
             f"{path} is not a pumped seepage run's checkpoint: resume the scene that wrote it, "

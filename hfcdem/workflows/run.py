@@ -45,7 +45,13 @@ from hfcdem.coupling.hydrofrac import (
 )
 from hfcdem.coupling.penetration import PressureRamp
 from hfcdem.info import versions
-from hfcdem.io.files import prepare_output_dir, to_builtin, write_interfaces, write_json
+from hfcdem.io.files import (
+    prepare_output_dir,
+    read_json,
+    to_builtin,
+    write_interfaces,
+    write_json,
+)
 from hfcdem.io.history import HistoryFile
 from hfcdem.io.plots import plot_lines
 from hfcdem.io.series import FieldSeries
@@ -582,10 +588,10 @@ def _resume(
 ) -> None:
     """Restore a stopped run from ``checkpoint.json`` and ``history.csv`` (collective)."""
     checkpoint = out / "checkpoint.json"
-    data = comm.bcast(
-        json.loads(checkpoint.read_text()) if comm.rank == 0 and checkpoint.exists() else None,
-        root=0,
-    )
+    try:
+        data = read_json(checkpoint, comm)
+    except ValueError as exc:
+        raise SceneError("", f"{exc}; start again with --force") from None
     if data is None:
         say("nothing to resume: no checkpoint.json; starting from t = 0")
         return
