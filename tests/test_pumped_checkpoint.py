@@ -89,6 +89,10 @@ def test_a_stopped_pumped_run_resumes_where_it_stopped(straight, shared_tmp_path
     assert summary["first_crack"]["point_m"] == pytest.approx(first["first_crack"]["point_m"])
     assert summary["initial_failures"] == first["initial_failures"]
     assert summary["max_mass_error"] < 1e-9
+    # the session before the stop, to its last checkpoint, is the case's cost too
+    assert first["earlier_sessions_wall_time_s"] == 0.0
+    assert summary["earlier_sessions_wall_time_s"] == pytest.approx(data["wall_s"])
+    assert 0.0 < data["wall_s"] < first["wall_time_s"]
     # the joints' frames before the stop are kept and the series goes on at the same times
     frames = read_pvd(out / "joints.pvd")
     assert frames[: len([f for f in frames_before if f[0] <= data["t"]])] == [
@@ -164,4 +168,6 @@ def test_checkpoints_are_spaced_by_what_writing_them_costs(shared_tmp_path, monk
     writer.offer(build)
     assert built == [0, 1]
     data = json.loads((shared_tmp_path / "c.json").read_text())
+    wall = data.pop("wall_s")
     assert data == {"steps": 2, "kind": "seepage_pumping", "mesh": "mesh", "workflow": {"a": 1}}
+    assert 0.6 < wall < 5.0  # the session's wall time at the write (none before it)

@@ -161,7 +161,7 @@ def _run_all(
         say(f"[{i}/{len(cases)}] {case.name}: {case.title} ({_time_left(est, clock)})")
         t0 = time.perf_counter()
         record = _run_case(case, case.tiers[tier], where, comm, fidelity, resolution, force, say)
-        spent = time.perf_counter() - t0
+        spent = time.perf_counter() - t0 + _earlier_sessions(where, record, comm)
         if record.status in ("ok", "limit") and not record.skipped and math.isfinite(est):
             clock.spent += spent
             clock.estimated += est
@@ -492,6 +492,14 @@ def _finish(
         prepare_output_dir(where, comm)
         write_json(path, _as_json(record), comm)
     return record
+
+
+def _earlier_sessions(where: Path, record: CaseRecord, comm: MPI.Comm) -> float:
+    """Wall time (s) of the sessions before a resumed case's last (0: not resumed)."""
+    if record.skipped:
+        return 0.0
+    summary = comm.bcast(_read(where / "summary.json") if comm.rank == 0 else None, root=0)
+    return float((summary or {}).get("earlier_sessions_wall_time_s") or 0.0)
 
 
 def _read(path: Path) -> dict[str, Any] | None:

@@ -41,11 +41,21 @@ class CheckpointFile:
     """Write a pumped run's checkpoint after a step when it is due (collective).
 
     ``mesh``: the mesh fingerprint a resume must match; ``extra``: entries of
-    the workflow's own, read when written (the first break's stress).
+    the workflow's own, read when written (the first break's stress);
+    ``earlier_wall``: the wall time of the sessions before this one (s), to
+    which each checkpoint adds this one's so far (``wall_s``).
     """
 
-    def __init__(self, path: Path, mesh: str, extra: Mapping[str, Any], comm: MPI.Comm) -> None:
+    def __init__(
+        self,
+        path: Path,
+        mesh: str,
+        extra: Mapping[str, Any],
+        comm: MPI.Comm,
+        earlier_wall: float = 0.0,
+    ) -> None:
         self.path, self.mesh, self.extra, self.comm = path, mesh, extra, comm
+        self.earlier_wall, self._began = earlier_wall, time.perf_counter()
         self._last = -math.inf  # wall clock of the last write's end (rank 0)
         self._cost = 0.0  # what the last write took (s)
         self.written = 0
@@ -58,7 +68,12 @@ class CheckpointFile:
         if not self.comm.bcast(due, root=0):
             return
         start = time.perf_counter()
-        data = build() | {"kind": KIND, "mesh": self.mesh, "workflow": dict(self.extra)}
+        data = build() | {
+            "kind": KIND,
+            "mesh": self.mesh,
+            "workflow": dict(self.extra),
+            "wall_s": self.earlier_wall + (start - self._began),
+        }
         if self.comm.rank == 0:  # compact: the joints' arrays hold tens of thousands of values
             write_atomic(self.path, json.dumps(to_builtin(data), allow_nan=True) + "\n")
         self.comm.barrier()

@@ -328,7 +328,11 @@ def _run_pumped(
 
     # measured at the first break: kept in the checkpoint for a resumed run's summary
     stress: dict[str, Any] = {} if earlier is None else dict(earlier.checkpoint["workflow"])
-    checkpoints = CheckpointFile(out / "checkpoint.json", fingerprint, stress, comm)
+    # the sessions before a resume, up to their last checkpoint: the case's cost in all
+    earlier_wall = 0.0 if earlier is None else float(earlier.checkpoint.get("wall_s", 0.0))
+    checkpoints = CheckpointFile(
+        out / "checkpoint.json", fingerprint, stress, comm, earlier_wall=earlier_wall
+    )
 
     def at_first_break(t: float, ratio: np.ndarray) -> None:
         ratios = place_ratios(scene, solid.midpoints, ratio, comm)
@@ -418,6 +422,7 @@ def _run_pumped(
         "stopped": result.stopped,
         "validity_limit": result.validity_limit,
         "until": phys.until,
+        "earlier_sessions_wall_time_s": earlier_wall,
     } | record()
     write_json(out / "summary.json", summary, comm)
     if comm.rank == 0 and result.history:
