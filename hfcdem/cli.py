@@ -221,6 +221,7 @@ def _say_run(name: str, summary: dict[str, Any], output: str, say: Any) -> int:
         return run_exit_code(summary)
     if summary.get("kind") == "seepage_pumping":
         fc = summary["first_crack_pressure_MPa"]
+        before = summary.get("earlier_sessions_wall_time_s")  # a resumed run's
         say(
             f"{name}: breakdown {breakdown_words(summary)}"
             + (
@@ -230,7 +231,9 @@ def _say_run(name: str, summary: dict[str, Any], output: str, say: Any) -> int:
                 else ""
             )
             + f", {summary['tensile_failures']} tensile / {summary['shear_failures']} shear, "
-            f"{summary['wall_time_s']:.1f} s; results in {output}/"
+            f"{summary['wall_time_s']:.1f} s"
+            + (f" (and {before:.1f} s before the resume)" if before else "")
+            + f"; results in {output}/"
         )
         return run_exit_code(summary)
     front = summary.get("fluid_front_m")

@@ -8,6 +8,7 @@ frames.  A checkpoint written on one rank resumes on two.
 """
 
 import json
+import re
 import time
 from pathlib import Path
 
@@ -15,6 +16,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
+from hfcdem.cli import main
 from hfcdem.config.scene import load_scene
 from hfcdem.config.tables import SceneError
 from hfcdem.io.series import read_pvd
@@ -171,3 +173,15 @@ def test_checkpoints_are_spaced_by_what_writing_them_costs(shared_tmp_path, monk
     wall = data.pop("wall_s")
     assert data == {"steps": 2, "kind": "seepage_pumping", "mesh": "mesh", "workflow": {"a": 1}}
     assert 0.6 < wall < 5.0  # the session's wall time at the write (none before it)
+
+
+def test_hfcdem_run_resume_says_the_time_before_the_resume(shared_tmp_path, capsys):
+    out = shared_tmp_path / "cli"
+    _stopped(out)
+    sets = [f"--set={k}={json.dumps(v)}" for k, v in SHORT.items()]
+    argv = ["run", str(PUMPING), "--resolution", "coarse", "-o", str(out), "--resume", *sets]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out.strip().splitlines()
+    if MPI.COMM_WORLD.rank == 0:  # the CLI speaks on rank 0
+        last = printed[-1]
+        assert re.search(r" s \(and \d+\.\d s before the resume\); results in ", last), last
