@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 from mpi4py import MPI
+from stopping import Interrupted, StopAt
 
 from hfcdem import references
 from hfcdem.cli import main
@@ -551,25 +552,15 @@ def test_time_left_scales_with_the_cases_done_once_a_minute_has_run():
     assert clock.remaining() == pytest.approx(300.0)  # at most 3x
 
 
-class _Interrupt(Exception):
-    pass
-
-
 def test_a_case_stopped_from_outside_goes_on_from_its_checkpoint(shared_tmp_path):
-    from hfcdem.workflows.observers import StepObserver
     from hfcdem.workflows.run import run_scene
-
-    class StopAt(StepObserver):
-        def step(self, frac, rec):
-            if rec.time >= 2.0:
-                raise _Interrupt
 
     out = shared_tmp_path / "stopped_report"
     kgd = next(c for c in CASES if c.name == "kgd")
     tier = kgd.tiers["quick"]
     scene = load_scene(ROOT / kgd.source, tier.resolution, overrides=dict(tier.fixed))
-    with pytest.raises(_Interrupt):  # as a time limit would stop it
-        run_scene(scene, out / "cases" / "kgd", observers=[StopAt()])
+    with pytest.raises(Interrupted):  # as a time limit would stop it
+        run_scene(scene, out / "cases" / "kgd", observers=[StopAt(2.0)])
     (record,) = run_reproduction(out, tier="quick", only=["kgd"])
     assert not record.skipped and record.status == "ok"
     assert (out / "cases" / "kgd" / "fields_resumed.bp").is_dir()  # went on, not again

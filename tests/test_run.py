@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 from mpi4py import MPI
+from stopping import Interrupted, StopAt
 
 from hfcdem.analytic import hubbert_willis_breakdown, kgd_viscosity
 from hfcdem.cli import first_crack_pressure_words, main
@@ -294,28 +295,13 @@ def test_cli_reports_bad_input_with_the_key(shared_tmp_path, capsys):
     assert not (shared_tmp_path / "bad_out").exists()
 
 
-class _Interrupt(Exception):
-    pass
-
-
-class StopAt(StepObserver):
-    """Interrupt a run after the step that reaches ``time`` (as Ctrl-C would)."""
-
-    def __init__(self, time):
-        self.time = time
-
-    def step(self, frac, rec):
-        if rec.time >= self.time:
-            raise _Interrupt
-
-
 def _straight_and_stopped(tmp):
     """Run KGD to the end into tmp/straight, and again into tmp/resumed stopped at 4 s."""
     scene = load_scene(KGD, "coarse")
     straight = tmp / "straight"
     run_scene(scene, straight)
     out = tmp / "resumed"
-    with pytest.raises(_Interrupt):
+    with pytest.raises(Interrupted):
         run_scene(scene, out, observers=[StopAt(4.0)])
     return scene, straight, out
 
@@ -323,7 +309,7 @@ def _straight_and_stopped(tmp):
 def test_a_resume_on_another_mesh_is_refused(shared_tmp_path):
     scene = load_scene(KGD, "coarse")
     out = shared_tmp_path / "stopped"
-    with pytest.raises(_Interrupt):
+    with pytest.raises(Interrupted):
         run_scene(scene, out, observers=[StopAt(1.0)])
     finer = load_scene(KGD)  # the default resolution: another mesh
     with pytest.raises(SceneError, match="another mesh"):
@@ -469,7 +455,7 @@ def test_a_reduced_run_resumes_on_the_band_it_had(shared_tmp_path):
     scene = load_scene(BOREHOLE, "coarse", overrides={"solver.solid": "reduced"})
     straight = run_scene(scene, shared_tmp_path / "straight")
     out = shared_tmp_path / "resumed"
-    with pytest.raises(_Interrupt):
+    with pytest.raises(Interrupted):
         run_scene(scene, out, observers=[StopAt(13.0)])
     data = json.loads((out / "checkpoint.json").read_text())
     assert data["interfaces"] and len(data["band"]) > len(data["interfaces"])

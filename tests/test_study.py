@@ -4,11 +4,11 @@ from pathlib import Path
 
 import pytest
 from mpi4py import MPI
+from stopping import Interrupted, StopAt
 
 from hfcdem.cli import main
 from hfcdem.config.scene import set_field as _set
 from hfcdem.config.tables import SceneError
-from hfcdem.workflows.observers import StepObserver
 from hfcdem.workflows.run import OutputInUse, run_scene, scene_fingerprint
 from hfcdem.workflows.study import (
     case_directory,
@@ -234,28 +234,13 @@ def test_every_shipped_study_file_loads_with_every_case_valid(path):
     assert len({repr(s) for s in scenes}) == len(scenes)  # each case a different scene
 
 
-class _Interrupt(Exception):
-    pass
-
-
-class _StopAt(StepObserver):
-    """Interrupt a run after the step that reaches ``time`` (as a time limit would)."""
-
-    def __init__(self, time):
-        self.time = time
-
-    def step(self, frac, rec):
-        if rec.time >= self.time:
-            raise _Interrupt
-
-
 def test_a_case_stopped_from_outside_goes_on_from_its_checkpoint(study_file, shared_tmp_path):
     study = load_study(study_file)
     out = shared_tmp_path / "stopped_study"
     case = out / case_directory(0, study.values[0])
     scene = study.case_scene(0)
-    with pytest.raises(_Interrupt):
-        run_scene(scene, case, observers=[_StopAt(1.0)])
+    with pytest.raises(Interrupted):
+        run_scene(scene, case, observers=[StopAt(1.0)])
     assert case_stopped(case, scene_fingerprint(scene))
     assert not case_stopped(case, scene_fingerprint(study.case_scene(1)))
     rows = run_study(study, out)

@@ -19,8 +19,9 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
+from hfcdem.config.tables import SceneError
 from hfcdem.coupling.hydrofrac import HydraulicFracture, StepRecord
-from hfcdem.io.files import write_json
+from hfcdem.io.files import read_json, write_json
 from hfcdem.io.history import HistoryFile
 from hfcdem.io.progress import TimeLeft
 from hfcdem.io.series import FieldSeries, output_times
@@ -107,6 +108,21 @@ class CheckpointWriter(StepObserver):
         write_json(self.path, data, self.comm)
 
 
+def read_checkpoint(out: Path, say: Callable[[str], None], comm: MPI.Comm) -> Any:
+    """Return ``out/checkpoint.json`` of a stopped run, the same on every rank (collective).
+
+    None when there is none (``say`` tells the run starts from t = 0); a file
+    that does not parse raises :class:`SceneError` on every rank.
+    """
+    try:
+        data = read_json(out / "checkpoint.json", comm)
+    except ValueError as exc:
+        raise SceneError("", f"{exc}; start again with --force") from None
+    if data is None:
+        say("nothing to resume: no checkpoint.json; starting from t = 0")
+    return data
+
+
 class FrameWriter(StepObserver):
     """Fields over time at the output interval, and the state a stopped run ended in."""
 
@@ -182,4 +198,5 @@ __all__ = [
     "ProgressLine",
     "StepObserver",
     "mesh_fingerprint",
+    "read_checkpoint",
 ]

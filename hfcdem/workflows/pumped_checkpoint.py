@@ -27,8 +27,9 @@ from mpi4py import MPI
 
 from hfcdem.config.tables import SceneError
 from hfcdem.coupling.pumping import COST_COLUMNS, Resume
-from hfcdem.io.files import read_json, to_builtin, write_atomic
+from hfcdem.io.files import to_builtin, write_atomic
 from hfcdem.io.history import HistoryFile
+from hfcdem.workflows.observers import read_checkpoint
 
 #: what the checkpoint says it is: a hydraulic-fracture run's checkpoint has no ``kind``
 KIND = "seepage_pumping"
@@ -99,12 +100,8 @@ def earlier_run(
     and for step files shorter than the checkpoint; nothing is written.
     """
     path = out / "checkpoint.json"
-    try:
-        data = read_json(path, comm)
-    except ValueError as exc:
-        raise SceneError("", f"{exc}; start again with --force") from None
+    data = read_checkpoint(out, say, comm)
     if data is None:
-        say("nothing to resume: no checkpoint.json; starting from t = 0")
         return None
     if not isinstance(data, dict) or data.get("kind") != KIND:
         raise SceneError(

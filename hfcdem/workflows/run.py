@@ -47,7 +47,6 @@ from hfcdem.coupling.penetration import PressureRamp
 from hfcdem.info import versions
 from hfcdem.io.files import (
     prepare_output_dir,
-    read_json,
     to_builtin,
     write_interfaces,
     write_json,
@@ -67,6 +66,7 @@ from hfcdem.workflows.observers import (
     ProgressLine,
     StepObserver,
     mesh_fingerprint,
+    read_checkpoint,
 )
 from hfcdem.workflows.places import (
     place_counts,
@@ -588,12 +588,8 @@ def _resume(
 ) -> None:
     """Restore a stopped run from ``checkpoint.json`` and ``history.csv`` (collective)."""
     checkpoint = out / "checkpoint.json"
-    try:
-        data = read_json(checkpoint, comm)
-    except ValueError as exc:
-        raise SceneError("", f"{exc}; start again with --force") from None
+    data = read_checkpoint(out, say, comm)
     if data is None:
-        say("nothing to resume: no checkpoint.json; starting from t = 0")
         return
     if data.get("kind") == SEEPAGE_CHECKPOINT:
         raise SceneError(
